@@ -1,0 +1,122 @@
+"""Command line: ``tippedisk simulate | plot``. Thin: parse, call the library, print one line.
+
+Bad input (a TippediskError) prints one line on stderr and exits with status 2;
+nothing is written then. A run that ended with a numerical failure exits with 1.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+
+from .errors import ParameterError, TippediskError
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line, exit status 2
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+def _finite_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a finite number")
+    return value
+
+
+def _add_simulate(sub) -> None:
+    p = sub.add_parser("simulate", help="simulate the tippedisk and write a netCDF dataset")
+    p.add_argument("--model", default="ode-euler", help="model name, e.g. ode-euler (ode1), ode-quaternion (ode2)")
+    p.add_argument("--t-end", type=_finite_float, default=5.0, help="end time [s] (default 5)")
+    p.add_argument("--output", "-o", required=True, help="netCDF file to write")
+    p.add_argument("--dt-output", type=_finite_float, help="output sampling [s] (default 1e-3)")
+    p.add_argument("--tol", type=_finite_float, help="integrator tolerance (default 1e-15)")
+    p.add_argument("--fall-angle", type=_finite_float, help="tilt above the table [rad] that ends a run (default 0.1)")
+    init = p.add_argument_group("initial state (Table 3 defaults)")
+    for name, default in (("alpha", 0.0), ("beta", "pi/2"), ("gamma0", "-pi/2 + 0.1"), ("alpha-dot", 40.0),
+                          ("beta-dot", 0.0), ("gamma-dot", "-alpha_dot cos(beta)")):
+        init.add_argument(f"--{name}", type=_finite_float, help=f"[rad or rad/s] (default {default})")
+    phys = p.add_argument_group("parameters (Tables 1-2, Sect. 6 defaults)")
+    for name, help_text in (("mu", "friction coefficient (0.3)"), ("eps", "smoothing of (2.29) [m/s] (0.1)"),
+                            ("radius", "disk radius r [m] (0.045)"), ("e", "eccentricity [m] (2.5e-3)"),
+                            ("mass", "mass [kg] (0.435)"), ("gravity", "[m/s^2] (9.81)")):
+        phys.add_argument(f"--{name}", type=_finite_float, help=help_text)
+
+
+def _simulate(args) -> int:
+    import dataclasses
+
+    from . import results
+    from .parameters import Disk, Friction, InitialState, Setup
+    from .solvers import resolve, simulate
+
+    info = resolve(args.model)
+    disk_kw = {k: v for k, v in (("r", args.radius), ("e", args.e), ("m", args.mass)) if v is not None}
+    fric_kw = {k: v for k, v in (("mu", args.mu), ("eps", args.eps)) if v is not None}
+    init_kw = {k: v for k, v in (("alpha", args.alpha), ("beta", args.beta), ("gamma", args.gamma0),
+                                 ("alpha_dot", args.alpha_dot), ("beta_dot", args.beta_dot),
+                                 ("gamma_dot", args.gamma_dot)) if v is not None}
+    setup = Setup(disk=dataclasses.replace(Disk(), **disk_kw), friction=dataclasses.replace(Friction(), **fric_kw),
+                  **({"gravity": args.gravity} if args.gravity is not None else {}))
+    options = {k: v for k, v in (("dt_output", args.dt_output), ("tol", args.tol),
+                                 ("fall_angle", args.fall_angle)) if v is not None}
+    output = _writable(args.output)
+    ds = simulate(info.name, args.t_end, setup=setup, initial=InitialState(**init_kw), **options)
+    results.save(ds, output)
+    print(f"{output}: {ds.attrs['model']} {ds.attrs['status']}: {ds.attrs['message']}")
+    return 1 if ds.attrs["status"] == "nonfinite" else 0
+
+
+def _add_plot(sub) -> None:
+    p = sub.add_parser("plot", help="draw a stored dataset as a PNG figure")
+    p.add_argument("dataset", help="netCDF file written by tippedisk")
+    p.add_argument("--output", "-o", help="PNG file (default: the dataset name with .png)")
+
+
+def _plot(args) -> int:
+    from . import plotting, results
+
+    ds = results.load(args.dataset)
+    output = _writable(args.output or str(Path(args.dataset).with_suffix(".png")))
+    plotting.plot_dataset(ds, output)
+    print(f"{output}: {ds.attrs['kind']} figure")
+    return 0
+
+
+def _writable(path: str) -> Path:
+    path = Path(path)
+    if not path.parent.is_dir():
+        raise ParameterError(f"directory {str(path.parent)!r} does not exist; create it or choose another --output")
+    return path
+
+
+COMMANDS = {"simulate": (_add_simulate, _simulate), "plot": (_add_plot, _plot)}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="tippedisk", description="Simulate and analyse the tippedisk (Sailer et al. 2020).")
+    from . import __version__
+
+    parser.add_argument("--version", action="version", version=f"tippedisk_analysis {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    for add, _ in COMMANDS.values():
+        add(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return COMMANDS[args.command][1](args)
+    except TippediskError as exc:
+        print(f"tippedisk {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,139 @@
+"""The dataset schema: names, units, long names, and the netCDF round trip.
+
+Every variable carries ``units`` and ``long_name``; the dataset carries the
+configuration that produced it as a JSON string (``config``), the package version,
+and ``status`` / ``message`` saying how the run ended. netCDF-safe throughout: no
+complex dtype, no bool or None attributes, categories as int8 with
+``flag_values`` / ``flag_meanings``. A dataset holding a non-finite value is refused.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from .errors import DatasetError
+
+PRODUCER = "tippedisk_analysis"
+
+# name: (units, long_name)
+VARIABLES: dict[str, tuple[str, str]] = {
+    "time": ("s", "time"),
+    "x": ("m", "x-coordinate of the geometric centre G"),
+    "y": ("m", "y-coordinate of the geometric centre G"),
+    "z": ("m", "height of the geometric centre G"),
+    "alpha": ("rad", "Euler angle alpha (precession, about e_z^I), unwrapped"),
+    "beta": ("rad", "Euler angle beta (inclination, about e_x^R)"),
+    "gamma": ("rad", "Euler angle gamma (rotation about the disk normal), unwrapped"),
+    "p0": ("1", "quaternion component p0"),
+    "p1": ("1", "quaternion component p1"),
+    "p2": ("1", "quaternion component p2"),
+    "p3": ("1", "quaternion component p3"),
+    "quaternion_norm_error": ("1", "|p| - 1"),
+    "x_dot": ("m s-1", "x-velocity of G"),
+    "y_dot": ("m s-1", "y-velocity of G"),
+    "z_dot": ("m s-1", "z-velocity of G"),
+    "alpha_dot": ("rad s-1", "rate of alpha"),
+    "beta_dot": ("rad s-1", "rate of beta"),
+    "gamma_dot": ("rad s-1", "rate of gamma"),
+    "omega_x": ("rad s-1", "angular velocity, body x-component"),
+    "omega_y": ("rad s-1", "angular velocity, body y-component"),
+    "omega_z": ("rad s-1", "angular velocity, body z-component"),
+    "z_S": ("m", "height of the centre of gravity S"),
+    "g_N1": ("m", "gap of the contact point C1"),
+    "gamma_N1": ("m s-1", "normal relative velocity at C1"),
+    "lambda_N": ("N", "normal contact force at C1"),
+    "slip_x": ("m s-1", "sliding velocity at C1, x-component (gamma_Tx)"),
+    "slip_y": ("m s-1", "sliding velocity at C1, y-component (gamma_Ty)"),
+    "E_kin": ("J", "kinetic energy"),
+    "E_pot": ("J", "potential energy m g z_S"),
+    "E_tot": ("J", "total energy E_kin + E_pot"),
+    "P_friction": ("W", "power of the friction force at C1"),
+    "W_friction": ("J", "work done by friction since t = 0"),
+}
+
+STATUS_MEANINGS = {
+    "completed": "reached t_end",
+    "fell": "the disk tilted down to the fall angle (sin beta -> 0, Euler singularity) and the run ended there",
+    "nonfinite": "the integrator produced a non-finite state; the dataset ends at the last finite sample",
+}
+
+
+def describe(ds: xr.Dataset) -> xr.Dataset:
+    """Attach units and long_name to every known variable and coordinate."""
+    for name in list(ds.variables):
+        if name in VARIABLES:
+            units, long_name = VARIABLES[name]
+            ds[name].attrs.setdefault("units", units)
+            ds[name].attrs.setdefault("long_name", long_name)
+    return ds
+
+
+def check_finite(ds: xr.Dataset) -> None:
+    """Raise DatasetError if any numeric variable holds a NaN or infinity."""
+    for name, var in ds.variables.items():
+        if np.issubdtype(var.dtype, np.floating) and not np.all(np.isfinite(var.values)):
+            raise DatasetError(f"variable {name!r} holds non-finite values; refusing to store a silent NaN")
+
+
+def make_attrs(kind: str, config: dict, status: str, message: str, **extra) -> dict:
+    """Dataset attributes in netCDF-safe types."""
+    from . import __version__
+
+    attrs = {
+        "producer": PRODUCER,
+        "producer_version": __version__,
+        "kind": kind,
+        "config": json.dumps(config, sort_keys=True),
+        "status": status,
+        "message": message,
+        "Conventions": "CF-1.8",
+    }
+    for key, value in extra.items():
+        if isinstance(value, bool):
+            value = int(value)
+        if value is None:
+            continue
+        attrs[key] = value
+    return attrs
+
+
+def config_of(ds: xr.Dataset) -> dict:
+    """The configuration stored in a dataset."""
+    return json.loads(ds.attrs["config"])
+
+
+def save(ds: xr.Dataset, path: str | os.PathLike) -> Path:
+    """Write ``ds`` as netCDF4 atomically: a temporary file renamed into place."""
+    check_finite(ds)
+    path = Path(path)
+    if path.parent and not path.parent.exists():
+        raise DatasetError(f"directory {str(path.parent)!r} does not exist; create it or choose another --output")
+    tmp = path.with_name(path.name + ".part")
+    try:
+        ds.to_netcdf(tmp, engine="netcdf4")
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+    return path
+
+
+def load(path: str | os.PathLike) -> xr.Dataset:
+    """Read a dataset written by this package (fully into memory)."""
+    path = Path(path)
+    if not path.is_file():
+        raise DatasetError(f"{str(path)!r} does not exist; give the path of a .nc file written by tippedisk")
+    try:
+        with xr.open_dataset(path, engine="netcdf4") as ds:
+            ds = ds.load()
+    except Exception as exc:  # netCDF4 raises OSError / ValueError for foreign files
+        raise DatasetError(f"{str(path)!r} is not a netCDF dataset ({exc.__class__.__name__}); "
+                           "give a .nc file written by tippedisk") from None
+    if ds.attrs.get("producer") != PRODUCER or "kind" not in ds.attrs:
+        raise DatasetError(f"{str(path)!r} was not written by tippedisk_analysis; give a .nc file written by tippedisk")
+    return ds

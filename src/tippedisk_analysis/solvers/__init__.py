@@ -1,0 +1,103 @@
+"""One front, models registered by name: :func:`simulate`.
+
+A registered model is a :class:`ModelInfo` whose ``run(setup, initial, t_end, **options)``
+returns a dataset with the schema of :mod:`tippedisk_analysis.results`. Its contract:
+
+1. validate its own options and raise :class:`ParameterError` naming the fix;
+2. never store a non-finite value: end the run with a ``status`` instead;
+3. store the configuration that produced the result (``config`` attribute).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import xarray as xr
+
+from ..errors import ParameterError, UnknownModelError
+from ..parameters import InitialState, Setup
+
+
+@dataclass(frozen=True)
+class ModelInfo:
+    name: str
+    paper_name: str
+    description: str
+    aliases: tuple[str, ...]
+    run: Callable[..., xr.Dataset]
+    options: tuple[str, ...]  # keyword options ``run`` accepts
+
+
+REGISTRY: dict[str, ModelInfo] = {}
+_ALIASES: dict[str, str] = {}
+
+
+def register(info: ModelInfo) -> ModelInfo:
+    for key in (info.name, *info.aliases):
+        if key in _ALIASES:
+            raise ValueError(f"model name {key!r} registered twice")
+        _ALIASES[key] = info.name
+    REGISTRY[info.name] = info
+    return info
+
+
+def model_names() -> list[str]:
+    """Every accepted model name and alias."""
+    return sorted(_ALIASES)
+
+
+def resolve(name: str) -> ModelInfo:
+    """The model registered under ``name`` (or one of its aliases)."""
+    key = str(name).strip().lower()
+    if key not in _ALIASES:
+        raise UnknownModelError(f"unknown model {name!r}; choose one of: {', '.join(REGISTRY)} "
+                                f"(aliases: {', '.join(sorted(set(_ALIASES) - set(REGISTRY)))})")
+    return REGISTRY[_ALIASES[key]]
+
+
+def simulate(model: str = "ode-euler", t_end: float = 5.0, *, setup: Setup | None = None,
+             initial: InitialState | None = None, **options) -> xr.Dataset:
+    """Simulate the tippedisk with a registered model.
+
+    setup: disk, friction, gravity (default: Tables 1-2, Sect. 6);
+    initial: initial Euler angles and rates (default: Table 3);
+    t_end [s]; further options depend on the model (e.g. ``dt_output``, ``tol``).
+    Returns an ``xarray.Dataset`` on an output time grid, with ``status`` and ``message``.
+    """
+    info = resolve(model)
+    if not (isinstance(t_end, int | float) and math.isfinite(t_end) and t_end > 0):
+        raise ParameterError(f"t_end = {t_end!r} s must be a positive number; give t_end > 0")
+    unknown = set(options) - set(info.options)
+    if unknown:
+        raise ParameterError(f"model {info.name!r} takes no option(s) {sorted(unknown)}; "
+                             f"it takes {sorted(info.options)}")
+    _check_positive(options, ("dt_output", "tol", "slip_smoothing", "fall_angle", "dt"))
+    if "fall_angle" in options and not options["fall_angle"] < math.pi / 2:
+        raise ParameterError("fall_angle must lie in (0, pi/2) rad; give e.g. 0.1")
+    return info.run(setup or Setup(), initial or InitialState(), float(t_end), **options)
+
+
+def _check_positive(options: dict, names) -> None:
+    for name in names:
+        if name in options:
+            value = options[name]
+            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
+                raise ParameterError(f"{name} = {value!r} must be a positive number")
+
+
+def _run_ode(model_name: str):
+    def run(setup, initial, t_end, **options):
+        from . import taylor  # heyoka is imported on first use only
+
+        return taylor.run(model_name, setup, initial, t_end, **options)
+
+    return run
+
+
+_ODE_OPTIONS = ("dt_output", "tol", "fall_angle", "slip_smoothing")
+register(ModelInfo("ode-euler", "ODE Model 1", "Euler angles, bilateral contact at C1, smooth Coulomb (heyoka)",
+                   ("ode1",), _run_ode("ode-euler"), _ODE_OPTIONS))
+register(ModelInfo("ode-quaternion", "ODE Model 2", "quaternions, bilateral contact at C1, smooth Coulomb (heyoka)",
+                   ("ode2",), _run_ode("ode-quaternion"), _ODE_OPTIONS))
