@@ -148,3 +148,20 @@ def test_parameters_are_runtime_parameters():
     ds = td.simulate("ode-euler", 0.5, setup=setup, dt_output=0.01)
     assert taylor.compiled.cache_info().misses == before
     assert float(abs(ds.E_tot - ds.E_tot[0]).max()) < 1e-12
+
+
+def test_nonfinite_state_ends_run_with_status(monkeypatch):
+    """eps = 0 at zero slip makes 0/0 in (2.29): the run must end with a status, storing no NaN."""
+    real = taylor.parameter_values
+
+    def eps_zero(setup, fall_angle, slip_smoothing):
+        values = real(setup, fall_angle, 0.0)
+        values[ode.PARAMETER_NAMES.index("eps")] = 0.0
+        return values
+
+    monkeypatch.setattr(taylor, "parameter_values", eps_zero)
+    ds = td.simulate("ode-euler", 1.0, dt_output=0.01)
+    assert ds.attrs["status"] == "nonfinite"
+    assert "non-finite" in ds.attrs["message"]
+    for name in ds.data_vars:
+        assert np.all(np.isfinite(ds[name].values)), name

@@ -30,9 +30,10 @@ def simulation_figure(ds: xr.Dataset):
     ax.plot(t, ds["z_S"] * 1e3, color="k")
     config_disk = _disk(ds)
     if config_disk:
-        for level, text in ((config_disk["r"] - config_disk["e"], "r - e"), (config_disk["r"] + config_disk["e"], "r + e")):
+        r, e = config_disk["r"], config_disk["e"]
+        for level, text, va in ((r - e, "r - e", "bottom"), (r + e, "r + e", "top")):
             ax.axhline(level * 1e3, color="0.7", lw=0.8)
-            ax.annotate(text, (float(t[-1]), level * 1e3), ha="right", va="bottom", color="0.4")
+            ax.annotate(text, (float(t[-1]), level * 1e3), ha="right", va=va, color="0.4")
     ax.set(xlabel="time t [s]", ylabel=r"$z_S$ [mm]", title="height of the centre of gravity")
 
     ax = axes[1, 0]

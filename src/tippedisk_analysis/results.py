@@ -102,6 +102,17 @@ def make_attrs(kind: str, config: dict, status: str, message: str, **extra) -> d
     return attrs
 
 
+def flat_parameters(setup) -> dict:
+    """Physical parameters as flat attributes, e.g. ``disk_r``, ``friction_eps``, ``gravity``."""
+    import dataclasses
+
+    flat = {"gravity": setup.gravity}
+    for group in ("disk", "friction"):
+        for key, value in dataclasses.asdict(getattr(setup, group)).items():
+            flat[f"{group}_{key}"] = value
+    return flat
+
+
 def config_of(ds: xr.Dataset) -> dict:
     """The configuration stored in a dataset."""
     return json.loads(ds.attrs["config"])

@@ -18,8 +18,12 @@ import xarray as xr
 
 from .. import kinematics as kin
 from ..models import ode
+from ..errors import IntegrationError
 from ..parameters import InitialState, Setup, to_dict
-from ..results import describe, make_attrs
+from ..results import describe, flat_parameters, make_attrs
+
+if hasattr(hy.llvm_state, "set_diskcache_enabled"):  # heyoka >= 7.10: compiled code persists across processes
+    hy.llvm_state.set_diskcache_enabled(True)
 
 
 @dataclass(frozen=True)
@@ -91,23 +95,24 @@ def integrate(model_name: str, setup: Setup, initial: InitialState, t_end: float
     states = np.asarray(states)
     time = grid[: len(states)]
 
-    if outcome == hy.taylor_outcome.time_limit:
-        status, message = "completed", f"reached t_end = {t_end:g} s"
-    elif outcome == hy.taylor_outcome.err_nf_state:
-        finite = np.all(np.isfinite(states), axis=1)
-        keep = int(np.argmin(finite)) if not finite.all() else len(states)
-        states, time = states[:keep], time[:keep]
-        status = "nonfinite"
-        message = (f"non-finite state at t = {ta.time:.6g} s; the dataset ends at the last finite sample "
-                   "(t = {:.6g} s); try a smaller --tol or check the parameters".format(time[-1] if len(time) else 0))
-    elif int(outcome) == -1:  # terminal event 0: fell
+    if int(outcome) == -1:  # terminal event 0: the disk fell; keep the state at the event
         states = np.vstack([states, ta.state[None, :]])
         time = np.append(time, ta.time)
+    outputs = evaluate_outputs(cm, states, pars)
+    finite = np.all(np.isfinite(states), axis=1) & np.all(np.isfinite(outputs), axis=0)
+    if outcome == hy.taylor_outcome.err_nf_state or not finite.all():
+        keep = len(finite) if finite.all() else int(np.argmin(finite))
+        t_last = float(time[keep - 1]) if keep else 0.0
+        message = (f"the state or its outputs became non-finite after t = {t_last:.6g} s; the dataset ends there. "
+                   "Check the parameters (eps > 0) or try a smaller --tol")
+        return Trajectory(time[:keep], states[:keep], outputs[:, :keep], "nonfinite", message, int(n_steps), t_last)
+    if int(outcome) == -1:
         status = "fell"
         message = f"the disk fell (tilt down to {fall_angle:g} rad above the table) at t = {ta.time:.6g} s"
+    elif outcome == hy.taylor_outcome.time_limit:
+        status, message = "completed", f"reached t_end = {t_end:g} s"
     else:  # pragma: no cover - no other outcome is configured
-        status, message = "nonfinite", f"integration stopped with outcome {outcome!r}"
-    outputs = evaluate_outputs(cm, states, pars)
+        raise IntegrationError(f"heyoka stopped with unexpected outcome {outcome!r}")
     return Trajectory(time, states, outputs, status, message, int(n_steps), float(ta.time))
 
 
@@ -152,7 +157,10 @@ def run(model_name: str, setup: Setup, initial: InitialState, t_end: float, *, d
     }
     lam = data["lambda_N"]
     extra = {"n_steps": traj.n_steps, "t_final": traj.t_final,
-             "lambda_N_min": float(lam.min()) if lam.size else 0.0}
+             "lambda_N_min": float(lam.min()) if lam.size else 0.0,
+             "integrator": "heyoka.taylor_adaptive", "tol": tol, **flat_parameters(setup)}
+    if traj.status == "fell":
+        extra["t_fell"] = traj.t_final
     message = traj.message
     if lam.size and lam.min() < 0:
         t_neg = float(traj.time[np.argmax(lam < 0)])
