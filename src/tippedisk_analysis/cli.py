@@ -95,7 +95,26 @@ def _writable(path: str) -> Path:
     return path
 
 
-COMMANDS = {"simulate": (_add_simulate, _simulate), "plot": (_add_plot, _plot)}
+def _add_study(sub) -> None:
+    p = sub.add_parser("study", help="run a study script from studies/ (dataset + figure)")
+    p.add_argument("name", nargs="?", help="study name (see --list)")
+    p.add_argument("--list", action="store_true", help="print the study names, one per line")
+    p.add_argument("--output-dir", default="output", help="folder for the dataset and figure (default output/)")
+
+
+def _study(args) -> int:
+    from . import studies
+
+    if args.list:
+        print("\n".join(studies.names()))
+        return 0
+    if not args.name:
+        raise ParameterError("give a study name or --list")
+    studies.run(args.name, args.output_dir)
+    return 0
+
+
+COMMANDS = {"simulate": (_add_simulate, _simulate), "plot": (_add_plot, _plot), "study": (_add_study, _study)}
 
 
 def build_parser() -> argparse.ArgumentParser:

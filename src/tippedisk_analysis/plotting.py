@@ -58,6 +58,57 @@ def _disk(ds: xr.Dataset) -> dict | None:
         return None
 
 
+def stroboscopic_figure(ds: xr.Dataset, t_stop: float | None = None, max_frames: int = 14):
+    """Stroboscopic images of the inversion (the paper's Fig. 17).
+
+    A fixed camera looks horizontally along the initial disk normal; a frame is taken
+    each time the disk faces the camera (alpha - alpha_0 a multiple of pi), as a
+    stroboscope synchronised with the spin would. The half of the disk on the side of
+    the centre of gravity S is shaded dark, so the inversion shows as the dark half rising.
+    """
+    import numpy as np
+
+    from .kinematics import rotation_from_euler
+
+    disk = _disk(ds)
+    r, e = disk["r"], disk["e"]
+    window = ds.sel(time=slice(0.0, t_stop))
+    half_turns = np.floor(np.abs(window.alpha.values - window.alpha.values[0]) / np.pi + 1e-9)
+    indices = np.flatnonzero(np.diff(half_turns, prepend=half_turns[0] - 1) != 0)[:max_frames]
+    frames = window.isel(time=indices)
+    R0 = rotation_from_euler(float(ds.alpha[0]), float(ds.beta[0]), float(ds.gamma[0]))
+    view = R0[:, 2] - R0[2, 2] * np.array([0.0, 0.0, 1.0])
+    view /= np.linalg.norm(view)
+    right = np.cross([0.0, 0.0, 1.0], view)
+    theta = np.linspace(-np.pi, np.pi, 181)
+    rim_B = np.stack([r * np.cos(theta), r * np.sin(theta), np.zeros_like(theta)])
+    heavy = np.abs(theta) <= np.pi / 2
+    n = len(indices)
+    fig, ax = plt.subplots(figsize=(1.3 * n + 0.6, 2.6), constrained_layout=True)
+    spacing = 2.5 * r
+    for k in range(n):
+        f = frames.isel(time=k)
+        R = rotation_from_euler(float(f.alpha), float(f.beta), float(f.gamma))
+        G = np.array([float(f.x), float(f.y), float(f.z)])
+        rim = G[:, None] + R @ rim_B
+        S = G + e * R[:, 0]
+        h = rim.T @ right + k * spacing - right @ G
+        ax.fill(h, rim[2], color="0.9", ec="0.2", lw=1.0)
+        ax.fill(np.append(h[heavy], G @ right + k * spacing - right @ G), np.append(rim[2][heavy], G[2]),
+                color="0.45", lw=0)
+        ax.plot(k * spacing, G[2], "o", color="w", mec="k", ms=4)
+        ax.plot(S @ right + k * spacing - right @ G, S[2], "o", color="tab:red", ms=4)
+        ax.annotate(f"{float(f.time):.3f} s", (k * spacing, -0.3 * r), ha="center", fontsize=8)
+    ax.axhline(0.0, color="k", lw=1.5)
+    ax.set_aspect("equal")
+    ax.set_ylim(-0.5 * r, 2.3 * r)
+    ax.set_xticks([])
+    ax.set_yticks([])
+    ax.set_title(f"{ds.attrs.get('paper_model', '')}, alpha_dot0 = {float(ds.alpha_dot[0]):g} rad/s: one frame per half "
+                 "turn; dark: half containing S (red), white dot: G", fontsize=9)
+    return fig
+
+
 FIGURES = {"simulation": simulation_figure}
 
 
