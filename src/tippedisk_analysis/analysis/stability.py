@@ -148,3 +148,20 @@ def spectrum(branch: str, omega, pars) -> Spectrum:
 def max_real_eig(branch: str, omega: float, pars) -> float:
     """Largest real part of the nontrivial eigenvalues at one spin rate [1/s]."""
     return float(spectrum(branch, [omega], pars).max_real_eig[0])
+
+
+def modal_coordinates(states, branch: str, omega: float, pars) -> tuple[np.ndarray, np.ndarray]:
+    """Modal amplitudes of deviations from the stationary solution: (eigenvalues (6,), c (6, N)).
+
+    The deviation y = x - x*(Omega) without its omega_x component (the spin family) obeys
+    y_dot = J' y to first order, so c = V^-1 y (V: eigenvectors of J') evolves as
+    c_k(t) = c_k(0) exp(s_k t): log|c_k| grows at the rate Re s_k. Used to compare the
+    linearisation with simulations (tests/test_stability.py).
+    """
+    x_star = st.stationary_state(branch, [omega])
+    J = jacobian(x_star, pars)[0]
+    vals, vecs = np.linalg.eig(J[np.ix_(KEEP, KEEP)])
+    order = np.argsort(-vals.real, kind="stable")
+    vals, vecs = vals[order], vecs[:, order]
+    y = np.asarray(states, dtype=float).reshape(N_STATE, -1) - x_star
+    return vals, np.linalg.solve(vecs, y[KEEP])

@@ -231,3 +231,14 @@ def _alpha_dot_grad_cfunc():
 def _alpha_dot_gradient(x, pars) -> np.ndarray:
     cf = _alpha_dot_grad_cfunc()
     return call_batch(cf, np.asarray(x, dtype=float).reshape(-1, 1), pars)[:, 0]
+
+
+def reduced_from_full(alpha, beta, gamma, x_dot, y_dot, omega_x, omega_y, omega_z) -> np.ndarray:
+    """Reduced states (7, N) from ODE Model 1 states (e.g. a simulation dataset's variables):
+    u = (e_x^R . v_G, e_y^R . v_G) with the R-frame turned by alpha about e_z^I (3.1)."""
+    alpha = np.asarray(alpha, dtype=float)
+    ca, sa = np.cos(alpha), np.sin(alpha)
+    u_x = ca * np.asarray(x_dot) + sa * np.asarray(y_dot)
+    u_y = -sa * np.asarray(x_dot) + ca * np.asarray(y_dot)
+    return np.atleast_2d(np.array([beta, gamma, u_x, u_y, omega_x, omega_y, omega_z], dtype=float).T).T.reshape(
+        len(STATE_NAMES), -1)
