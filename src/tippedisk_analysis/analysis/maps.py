@@ -46,14 +46,15 @@ def parse_range(text: str, name: str) -> np.ndarray:
         elif len(parts) == 3:
             start, stop = float(parts[0]), float(parts[1])
             n = int(parts[2])
-            if n < 1 or (n == 1 and start != stop):
+            if n < 1 or (n == 1 and start != stop) or not (math.isfinite(start) and math.isfinite(stop)):
                 raise ValueError
             values = np.linspace(start, stop, n)
         else:
             raise ValueError
     except ValueError:
-        raise ParameterError(f"--{name} {text!r} is not a range; give START:STOP:N with N >= 2 values "
-                             f"(N = 1 needs START = STOP), e.g. --{name} 0:100:101, or one number") from None
+        raise ParameterError(f"--{name} {text!r} is not a range; give START:STOP:N (finite numbers, N >= 2 "
+                             f"values; N = 1 needs START = STOP), e.g. --{name} 0:100:101, or one number "
+                             f"(write --{name}=-1:1:3 for a negative START)") from None
     if not np.all(np.isfinite(values)):
         raise ParameterError(f"--{name} {text!r} holds a non-finite value; give finite numbers")
     return values
