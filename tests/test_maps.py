@@ -4,13 +4,11 @@ import json
 
 import numpy as np
 import pytest
-import xarray as xr
 from xarray.testing import assert_identical
 
-from tippedisk_analysis import ParameterError, results
+from tippedisk_analysis import Friction, ParameterError, Setup, results
 from tippedisk_analysis.analysis import maps
 from tippedisk_analysis.analysis import stability as sb
-from tippedisk_analysis.analysis import stationary as st
 from tippedisk_analysis.cli import main
 
 OMEGA = np.linspace(20.0, 45.0, 26)
@@ -48,7 +46,7 @@ def test_map_layout(small_map):
     assert json.loads(ds.attrs["config"])["omega"] == {"start": 20.0, "stop": 45.0, "n": 26}
     # the stored eigenvalues are the ones of the API at a grid point
     ev = sb.spectrum("inverted", [OMEGA[3]], maps._parameter_grid(
-        maps.Setup(), {"eps": [EPS[1]]}, 1e-12, (1, 1))).eigenvalues[0]
+        Setup(), {"eps": [EPS[1]]}, 1e-12, (1, 1))).eigenvalues[0]
     np.testing.assert_allclose(ds["eig_real"].sel(branch="inverted").isel(omega=3, eps=1), ev.real)
     assert float(ds["residual"].max()) < 1e-10
 
@@ -64,12 +62,16 @@ def test_critical_speeds_are_sign_changes_refined_to_1e_6(small_map):
             k = int(n.sel(branch=b, eps=eps))
             oc = ds["omega_critical"].sel(branch=b, eps=eps).values
             assert np.all(oc[k:] == pad) and np.all(np.diff(oc[:k]) > 0)
-            pars = maps._parameter_grid(maps.Setup(), {"eps": [eps]}, 1e-12, (1, 1))[:, 0]
+            pars = maps._parameter_grid(Setup(), {"eps": [eps]}, 1e-12, (1, 1))[:, 0]
             for om, d in zip(oc[:k], ds["critical_direction"].sel(branch=b, eps=eps).values[:k]):
                 below = sb.max_real_eig(str(b), om * (1 - 1e-6), pars)
                 above = sb.max_real_eig(str(b), om * (1 + 1e-6), pars)
                 assert below * above < 0  # a sign change within 1e-6 relative
                 assert d == (1 if above < 0 else -1)
+    direct = maps.find_critical_speeds("inverted", OMEGA, setup=Setup(friction=Friction(eps=0.25)))
+    k = int(n.sel(branch="inverted", eps=0.25))
+    np.testing.assert_allclose([c[0] for c in direct], ds["omega_critical"].sel(branch="inverted", eps=0.25)[:k],
+                               rtol=1e-12)
     curves = maps.critical_speed_curves(ds)
     assert set(curves) == {"noninverted", "inverted"}
     assert int(np.isfinite(curves["inverted"]).sum()) == int(n.sel(branch="inverted").sum())

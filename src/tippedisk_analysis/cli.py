@@ -97,7 +97,8 @@ def _writable(path: str) -> Path:
 
 def _add_stability_map(sub) -> None:
     p = sub.add_parser("stability-map", help="eigenvalue stability of the spinning solutions over Omega and eps")
-    p.add_argument("--omega", required=True, help="spin rates START:STOP:N [rad/s] (N values, ends included; --omega=-50:50:101 for a negative START)")
+    p.add_argument("--omega", required=True, help="spin rates START:STOP:N [rad/s] (N values, ends included; "
+                   "write --omega=-50:50:101 for a negative START)")
     p.add_argument("--eps", required=True, help="smoothing eps of (2.29) START:STOP:N [m/s]")
     p.add_argument("--mu", help="friction coefficient START:STOP:N or one value (default 0.3, not a dimension)")
     p.add_argument("--e", help="eccentricity START:STOP:N or one value [m] (default 2.5e-3, not a dimension)")

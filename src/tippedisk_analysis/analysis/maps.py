@@ -24,7 +24,7 @@ from scipy.optimize import brentq
 
 from ..errors import ParameterError
 from ..models import ode
-from ..parameters import Disk, Friction, Setup, to_dict
+from ..parameters import Setup, to_dict
 from ..results import make_attrs
 from . import stability as sb
 from . import stationary as st
@@ -127,7 +127,8 @@ def stability_map(omega, eps, *, mu=None, e=None, setup: Setup | None = None,
                 "units": "s-1", "long_name": "real part of the nontrivial eigenvalues of the reduced Jacobian",
                 "comment": "sorted by real part, descending; the structural zero of the spin family is excluded"}),
             "eig_imag": ((*bdims, "eig"), np.stack(fields["eig_imag"]), {
-                "units": "rad s-1", "long_name": "imaginary part of the nontrivial eigenvalues of the reduced Jacobian"}),
+                "units": "rad s-1",
+                "long_name": "imaginary part of the nontrivial eigenvalues of the reduced Jacobian"}),
             "max_real_eig": (bdims, np.stack(fields["max_real_eig"]), {
                 "units": "s-1", "long_name": "largest real part of the nontrivial eigenvalues (growth rate)"}),
             "n_unstable": (bdims, np.stack(fields["n_unstable"]).astype(np.int32), {
@@ -141,7 +142,8 @@ def stability_map(omega, eps, *, mu=None, e=None, setup: Setup | None = None,
                 "units": "N", "long_name": "normal contact force at C1 of the stationary solution"}),
             "residual": (bdims, np.stack(fields["residual"]), {
                 "units": "1", "long_name": "max |right-hand side| of the reduced system at the stationary solution",
-                "comment": "mixed units (rad s-1, m s-2, rad s-2); round-off level for an exact equilibrium"}),
+                "comment": "mixed units (rad s-1, m s-2, rad s-2); round-off level: the Jacobian times the "
+                           "rounding of pi/2 (cos(pi/2) = 6e-17 in double precision)"}),
         },
         coords={
             "branch": ("branch", np.array(BRANCH_NAMES), {"long_name": "stationary solution family (Fig. 6)",
@@ -254,6 +256,19 @@ def _roots(branch: str, omega: np.ndarray, mre: np.ndarray, pars: np.ndarray) ->
         ev = sb.spectrum(branch, [root], pars).eigenvalues[0]
         roots.append((float(root), direction, float(abs(ev[0].imag))))
     return roots
+
+
+def find_critical_speeds(branch: str, omega, setup: Setup | None = None,
+                         slip_smoothing: float = 1e-12) -> list[tuple[float, int, float]]:
+    """Critical spin speeds of one branch for one parameter set, searched on the grid ``omega``:
+    a list of (Omega_c [rad/s], direction (+1 stabilising, -1 destabilising with increasing Omega),
+    |Im s| of the crossing eigenvalue [rad/s])."""
+    from ..solvers.taylor import parameter_values
+
+    st._branch_sign(branch)
+    omega = _as_axis(omega, "omega")
+    pars = parameter_values(setup or Setup(), fall_angle=0.1, slip_smoothing=slip_smoothing)
+    return _roots(branch, omega, sb.spectrum(branch, omega, pars).max_real_eig, pars)
 
 
 def critical_speed_curves(ds: xr.Dataset) -> dict[str, xr.DataArray]:
