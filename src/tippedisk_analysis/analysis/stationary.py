@@ -166,7 +166,7 @@ class Equilibrium:
     """Result of :func:`solve`: a status, never an exception, so sweeps can flag failures."""
 
     state: np.ndarray  # (7,), STATE_NAMES order (the last iterate if not converged)
-    status: str  # "converged", "max_iter", "singular", "nonfinite", "lift_off"
+    status: str  # "converged", "no_equilibrium", "max_iter", "singular", "nonfinite", "lift_off"
     message: str
     residual: float  # max |rhs| at ``state``, scaled: [rad/s, rad/s, m/s^2, m/s^2, rad/s^2...] mixed
     iterations: int
@@ -184,23 +184,20 @@ def solve(guess, omega: float, pars=None, *, tol: float = 1e-12, max_iter: int =
     extra equation pins the member of the spin family (without it the Jacobian is singular
     along d/dOmega). The step solves the 8x7 linear least-squares problem with the exact
     Jacobian (:mod:`.stability`), which converges quadratically to a zero-residual solution.
-    Converged when the scaled step and the residual are below ``tol``. Returns status
-    "singular" (rank-deficient step), "nonfinite", "max_iter" (no equilibrium found near the
-    guess), "lift_off" (converged with lambda_N <= 0: outside the bilateral model) or "converged".
+    Converged when the step is below ``tol`` (relative) and the residual is at round-off level
+    (1e-12 |J| (1 + |x|)). Otherwise the status says why: "no_equilibrium" (Gauss-Newton
+    stalled at a least-squares minimum with a finite residual), "max_iter", "singular"
+    (rank-deficient step), "nonfinite", or "lift_off" (converged with lambda_N <= 0: outside the
+    bilateral model).
     """
-    from .stability import jacobian
-
     pars = parameter_vector() if pars is None else np.asarray(pars, dtype=float)
     x = np.array(guess, dtype=float).reshape(len(STATE_NAMES))
     if not (np.all(np.isfinite(x)) and math.isfinite(omega)):
         raise ParameterError("guess and omega must be finite numbers; give a finite initial state")
-    scale = 1.0 + abs(omega)
     status, message, it = "max_iter", f"no equilibrium within {max_iter} Newton steps of the guess", 0
     res = math.inf
     for it in range(1, max_iter + 1):
-        ev = evaluate(x, pars)
-        F = np.append(ev["rhs"][:, 0], ev["alpha_dot"][0] - omega)
-        J = np.vstack([jacobian(x, pars)[0], _alpha_dot_gradient(x, pars)])
+        F, J = _newton_system(x, omega, pars)
         if not (np.all(np.isfinite(F)) and np.all(np.isfinite(J))):
             status, message = "nonfinite", "the equations are not finite at the iterate (sin(beta) -> 0?)"
             break
@@ -210,15 +207,31 @@ def solve(guess, omega: float, pars=None, *, tol: float = 1e-12, max_iter: int =
             status, message = "singular", "the Newton matrix is rank deficient; try another guess"
             break
         x = x + step
-        if np.max(np.abs(step)) <= tol * (1.0 + np.max(np.abs(x))) and res <= tol * scale**2 * 1e3:
-            ev = evaluate(x, pars)
-            res = float(np.max(np.abs(np.append(ev["rhs"][:, 0], ev["alpha_dot"][0] - omega))))
-            status, message = "converged", f"converged in {it} Newton steps, residual {res:.2e}"
+        if np.max(np.abs(step)) <= tol * (1.0 + np.max(np.abs(x))):
+            F, J = _newton_system(x, omega, pars)
+            res = float(np.max(np.abs(F)))
+            # round-off level of the residual: |J| times the rounding of the state
+            if res <= 1e-12 * np.abs(J).max() * (1.0 + np.max(np.abs(x))):
+                status, message = "converged", f"converged in {it} Newton steps, residual {res:.2e}"
+            else:
+                status = "no_equilibrium"
+                message = (f"Newton stalled at a least-squares minimum with residual {res:.3g}: "
+                           "no equilibrium near the guess")
             break
     lam = float(evaluate(x, pars)["lambda_N"][0]) if np.all(np.isfinite(x)) else math.nan
     if status == "converged" and not lam > 0:
         status, message = "lift_off", f"equilibrium has lambda_N = {lam:.3g} N <= 0: the contact would open"
     return Equilibrium(x, status, message, res, it, lam)
+
+
+def _newton_system(x, omega, pars):
+    """Residual (8,) and its Jacobian (8, 7): rhs = 0 and alpha_dot = omega."""
+    from .stability import jacobian
+
+    ev = evaluate(x, pars)
+    F = np.append(ev["rhs"][:, 0], ev["alpha_dot"][0] - omega)
+    J = np.vstack([jacobian(x, pars)[0], _alpha_dot_gradient(x, pars)])
+    return F, J
 
 
 @functools.lru_cache(maxsize=None)
