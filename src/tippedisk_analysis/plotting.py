@@ -83,17 +83,24 @@ def stability_map_figure(ds: xr.Dataset, eps_index: int | None = None):
         b = sub.sel(branch=branch)
         ax = axes[0, j]
         mre = b["max_real_eig"].transpose("eps", "omega").values
+        oc = curves[str(branch)].transpose("eps", "crossing").values
         if len(omega) > 1 and len(eps) > 1:
             mesh = ax.pcolormesh(omega, eps, mre, cmap="RdBu_r", norm=norm, shading="nearest")
             ax.contour(omega, eps, mre, levels=[0.0], colors="k", linewidths=0.8)
             fig.colorbar(mesh, ax=ax, label=r"max Re $s$ [1/s]")
-        oc = curves[str(branch)].transpose("eps", "crossing").values
-        for c in range(oc.shape[1]):
-            ax.plot(oc[:, c], eps, "o", ms=3, color="gold", mec="k", mew=0.4,
-                    label=r"$\Omega_c(\varepsilon)$" if c == 0 else None)
-        ax.axhline(eps[k], color="0.4", ls=":", lw=0.8)
-        ax.set(xlabel=r"spin rate $\Omega$ [rad/s]", ylabel=r"$\varepsilon$ [m/s]",
-               title=f"{branch}: growth rate (red unstable, blue stable)")
+            for c in range(oc.shape[1]):
+                ax.plot(oc[:, c], eps, "o", ms=3, color="gold", mec="k", mew=0.4,
+                        label=r"$\Omega_c(\varepsilon)$" if c == 0 else None)
+            ax.axhline(eps[k], color="0.4", ls=":", lw=0.8)
+            ax.set(xlabel=r"spin rate $\Omega$ [rad/s]", ylabel=r"$\varepsilon$ [m/s]",
+                   title=f"{branch}: growth rate (red unstable, blue stable)")
+        else:  # a single eps: the growth rate as a curve (first eps if only one Omega)
+            ax.plot(omega, mre[0], "-", color="k")
+            ax.axhline(0.0, color="0.5", lw=0.8)
+            ax.plot(oc[0], np.zeros_like(oc[0]), "o", color="gold", mec="k", label=r"$\Omega_c$")
+            ax.set_yscale("symlog", linthresh=0.1)
+            ax.set(xlabel=r"spin rate $\Omega$ [rad/s]", ylabel=r"max Re $s$ [1/s]",
+                   title=f"{branch}: growth rate at eps = {eps[0]:g} m/s")
         if np.isfinite(oc).any():
             ax.legend(loc="upper right", fontsize=8)
         ax = axes[1, j]
