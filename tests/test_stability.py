@@ -105,3 +105,15 @@ def test_linearisation_predicts_decay_in_the_stable_window():
     predicted, measured = _measured_rates("inverted", 31.0, 0.25, 1e-3, 5.0, (0.5, 5.0), modes=(0, 2))
     assert np.all(predicted < 0)
     np.testing.assert_allclose(measured, predicted, rtol=2e-3)
+
+
+def test_batched_evaluation_matches_pointwise():
+    rng = np.random.default_rng(3)
+    omega = rng.uniform(-80, 80, 6)
+    pars = np.repeat(PARS[:, None], 6, axis=1)
+    pars[8] = rng.uniform(0.01, 1.0, 6)  # eps per point
+    batch = sb.spectrum("inverted", omega, pars)
+    for i in range(6):
+        single = sb.spectrum("inverted", [omega[i]], pars[:, i])
+        np.testing.assert_array_equal(batch.jacobian[i], single.jacobian[0])
+        np.testing.assert_allclose(batch.eigenvalues[i], single.eigenvalues[0], rtol=1e-12, atol=1e-12)
