@@ -114,7 +114,31 @@ def _study(args) -> int:
     return 0
 
 
-COMMANDS = {"simulate": (_add_simulate, _simulate), "plot": (_add_plot, _plot), "study": (_add_study, _study)}
+def _add_stability_map(sub) -> None:
+    p = sub.add_parser("stability-map", help="eigenvalue stability of the spinning solutions over Omega and eps")
+    p.add_argument("--omega", required=True, help="spin rates START:STOP:N [rad/s] (N values, ends included; "
+                   "write --omega=-50:50:101 for a negative START)")
+    p.add_argument("--eps", required=True, help="smoothing eps of (2.29) START:STOP:N [m/s]")
+    p.add_argument("--mu", help="friction coefficient START:STOP:N or one value (default 0.3, not a dimension)")
+    p.add_argument("--e", help="eccentricity START:STOP:N or one value [m] (default 2.5e-3, not a dimension)")
+    p.add_argument("--output", "-o", required=True, help="netCDF file to write")
+
+
+def _stability_map(args) -> int:
+    from . import results
+    from .analysis import maps
+
+    ranges = {name: maps.parse_range(getattr(args, name), name) if getattr(args, name) is not None else None
+              for name in ("omega", "eps", "mu", "e")}
+    output = _writable(args.output)
+    ds = maps.stability_map(ranges["omega"], ranges["eps"], mu=ranges["mu"], e=ranges["e"])
+    results.save(ds, output)
+    print(f"{output}: stability map {ds.attrs['message']}")
+    return 0
+
+
+COMMANDS = {"simulate": (_add_simulate, _simulate), "plot": (_add_plot, _plot), "study": (_add_study, _study),
+            "stability-map": (_add_stability_map, _stability_map)}
 
 
 def build_parser() -> argparse.ArgumentParser:

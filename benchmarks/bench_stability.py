@@ -1,0 +1,52 @@
+"""Benchmark: eigenvalue stability of 100,000 (Omega, eps) points per branch (target <= 10 s on 2 cores).
+
+Run: PYTHONPATH=src python benchmarks/bench_stability.py [n_omega n_eps]
+Measures (1) the batched compiled Jacobian + eigenvalues alone and (2) the full
+:func:`stability_map` (with the stationary residuals and the brentq refinement of Omega_c).
+Compilation (or the heyoka on-disk cache lookup) is timed separately.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+
+import numpy as np
+
+
+def main(n_omega: int = 400, n_eps: int = 250) -> None:
+    t0 = time.perf_counter()
+    from tippedisk_analysis.analysis import maps, stability, stationary
+
+    stability._jacobian_cfunc()
+    stationary._rhs_cfunc()
+    t_compile = time.perf_counter() - t0
+    omega = np.linspace(0.0, 200.0, n_omega)
+    eps = np.linspace(0.01, 1.0, n_eps)
+    n = n_omega * n_eps
+    print(f"points per branch: {n:,} ({n_omega} Omega x {n_eps} eps); cores: {os.cpu_count()} (shared machine)")
+    print(f"compile / cache load: {t_compile:.2f} s")
+
+    pars = np.repeat(stationary.parameter_vector()[:, None], n, axis=1)
+    pars[8] = np.tile(eps, n_omega)
+    om = np.repeat(omega, n_eps)
+    for branch in maps.BRANCH_NAMES:
+        t = time.perf_counter()
+        x = stationary.stationary_state(branch, om)
+        J = stability.jacobian(x, pars)
+        t_j = time.perf_counter() - t
+        ev = stability.nontrivial_eigenvalues(J)
+        stability.classify(ev)
+        t_all = time.perf_counter() - t
+        print(f"{branch:12s} Jacobian {t_j:.2f} s, + eigenvalues/classification {t_all:.2f} s")
+
+    t = time.perf_counter()
+    ds = maps.stability_map(omega, eps)
+    t_map = time.perf_counter() - t
+    print(f"stability_map, both branches incl. {int(ds['n_critical'].sum())} critical speeds: {t_map:.2f} s "
+          f"({t_map / 2:.2f} s per branch)")
+
+
+if __name__ == "__main__":
+    main(*(int(a) for a in sys.argv[1:3]))

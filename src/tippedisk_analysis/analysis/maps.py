@@ -1,0 +1,279 @@
+"""Stability maps of the spinning solutions over the spin rate Omega and eps (and mu, e),
+and the critical spin speeds Omega_c where a branch changes stability.
+
+:func:`stability_map` evaluates, for both stationary families of Sect. 6 (Fig. 6), the six
+nontrivial eigenvalues of the reduced Jacobian (:mod:`.stability`) on a grid, in one batched
+call of the compiled Jacobian, and returns a labelled ``xarray.Dataset`` (kind
+``"stability_map"``). Critical spin speeds are the zeros of max_real_eig(Omega) at fixed
+(eps, mu, e): every sign change between neighbouring grid values of Omega is refined with
+``scipy.optimize.brentq`` to a relative accuracy far below 1e-6 (``CRITICAL_RTOL``). Sign
+changes between grid points closer than the grid spacing to each other can be missed: refine
+the Omega grid if in doubt. Points where max_real_eig is exactly 0 on the grid are reported
+as critical without refinement.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import heyoka as hy
+import numpy as np
+import xarray as xr
+from scipy.optimize import brentq
+
+from ..errors import ParameterError
+from ..models import ode
+from ..parameters import Setup, to_dict
+from ..results import make_attrs
+from . import stability as sb
+from . import stationary as st
+
+BRANCH_NAMES = tuple(st.BRANCHES)
+CRITICAL_RTOL = 1e-10  # brentq relative tolerance on Omega_c (1e-6 required)
+CRITICAL_PAD = -1.0e30  # padding of omega_critical beyond n_critical (not a _FillValue: never masked to NaN)
+SWEEPABLE = {"eps": ("m s-1", "smoothing velocity eps of the regularised Coulomb law (2.29)"),
+             "mu": ("1", "friction coefficient mu (2.29)"),
+             "e": ("m", "eccentricity e = |r_GS| of the centre of gravity")}
+
+
+def parse_range(text: str, name: str) -> np.ndarray:
+    """``START:STOP:N`` -> N evenly spaced values from START to STOP inclusive; a single number -> 1 value."""
+    parts = str(text).split(":")
+    try:
+        if len(parts) == 1:
+            values = np.array([float(parts[0])])
+        elif len(parts) == 3:
+            start, stop = float(parts[0]), float(parts[1])
+            n = int(parts[2])
+            if n < 1 or (n == 1 and start != stop) or not (math.isfinite(start) and math.isfinite(stop)):
+                raise ValueError
+            values = np.linspace(start, stop, n)
+        else:
+            raise ValueError
+    except ValueError:
+        raise ParameterError(f"--{name} {text!r} is not a range; give START:STOP:N (finite numbers, N >= 2 "
+                             f"values; N = 1 needs START = STOP), e.g. --{name} 0:100:101, or one number "
+                             f"(write --{name}=-1:1:3 for a negative START)") from None
+    if not np.all(np.isfinite(values)):
+        raise ParameterError(f"--{name} {text!r} holds a non-finite value; give finite numbers")
+    return values
+
+
+def _validated(setup: Setup, name: str, values: np.ndarray) -> None:
+    """Run the parameter validation of Friction / Disk on every swept value (ParameterError names the fix)."""
+    for v in np.unique(values):
+        if name in ("eps", "mu"):
+            dataclasses.replace(setup.friction, **{name: float(v)})
+        elif name == "e":
+            dataclasses.replace(setup.disk, e=float(v))
+
+
+def _parameter_grid(setup: Setup, sweeps: dict, slip_smoothing: float, shape) -> np.ndarray:
+    """(11, prod(shape)) runtime parameters, ode.PARAMETER_NAMES order, for the flattened grid."""
+    from ..solvers.taylor import parameter_values
+
+    base = parameter_values(setup, fall_angle=0.1, slip_smoothing=slip_smoothing)
+    pars = np.repeat(base[:, None], int(np.prod(shape)), axis=1)
+    dims = list(sweeps)
+    for axis, name in enumerate(dims, start=1):  # axis 0 is omega
+        values = np.asarray(sweeps[name], dtype=float)
+        index_shape = [1] * len(shape)
+        index_shape[axis] = len(values)
+        pars[ode.PARAMETER_NAMES.index(name)] = np.broadcast_to(values.reshape(index_shape), shape).ravel()
+    return pars
+
+
+def stability_map(omega, eps, *, mu=None, e=None, setup: Setup | None = None,
+                  slip_smoothing: float = 1e-12, critical: bool = True) -> xr.Dataset:
+    """Eigenvalue stability of both spinning branches on the grid omega x eps (x mu x e).
+
+    omega [rad/s] and eps [m/s]: 1-D arrays (dims of the result); mu [-] and e [m]: None
+    (take ``setup``'s value, default Tables 1-2) or 1-D arrays (further dims). Returns a
+    Dataset with dims (branch, omega, eps[, mu][, e], eig) and, if ``critical``, the critical
+    spin speeds ``omega_critical`` (branch, eps[, mu][, e], crossing) with ``n_critical``.
+    """
+    setup = setup or Setup()
+    omega = _as_axis(omega, "omega")
+    sweeps = {"eps": _as_axis(eps, "eps")}
+    for name, values in (("mu", mu), ("e", e)):
+        if values is not None:
+            sweeps[name] = _as_axis(values, name)
+    for name, values in sweeps.items():
+        _validated(setup, name, values)
+    shape = (len(omega), *(len(v) for v in sweeps.values()))
+    pars = _parameter_grid(setup, sweeps, slip_smoothing, shape)
+    om_flat = np.broadcast_to(omega.reshape(-1, *([1] * len(sweeps))), shape).ravel()
+
+    dims = ("omega", *sweeps)
+    fields = {k: [] for k in ("eig_real", "eig_imag", "max_real_eig", "n_unstable", "stability", "lambda_N",
+                              "residual")}
+    for branch in BRANCH_NAMES:
+        x = st.stationary_state(branch, om_flat)
+        spec = sb.spectrum(branch, om_flat, pars)
+        ev = st.evaluate(x, pars)
+        fields["eig_real"].append(spec.eigenvalues.real.reshape(*shape, sb.N_EIG))
+        fields["eig_imag"].append(spec.eigenvalues.imag.reshape(*shape, sb.N_EIG))
+        fields["max_real_eig"].append(spec.max_real_eig.reshape(shape))
+        fields["n_unstable"].append(spec.n_unstable.reshape(shape))
+        fields["stability"].append(spec.stability.reshape(shape))
+        fields["lambda_N"].append(ev["lambda_N"].reshape(shape))
+        fields["residual"].append(np.max(np.abs(ev["rhs"]), axis=0).reshape(shape))
+
+    bdims = ("branch", *dims)
+    ds = xr.Dataset(
+        {
+            "eig_real": ((*bdims, "eig"), np.stack(fields["eig_real"]), {
+                "units": "s-1", "long_name": "real part of the nontrivial eigenvalues of the reduced Jacobian",
+                "comment": "sorted by real part, descending; the structural zero of the spin family is excluded"}),
+            "eig_imag": ((*bdims, "eig"), np.stack(fields["eig_imag"]), {
+                "units": "rad s-1",
+                "long_name": "imaginary part of the nontrivial eigenvalues of the reduced Jacobian"}),
+            "max_real_eig": (bdims, np.stack(fields["max_real_eig"]), {
+                "units": "s-1", "long_name": "largest real part of the nontrivial eigenvalues (growth rate)"}),
+            "n_unstable": (bdims, np.stack(fields["n_unstable"]).astype(np.int32), {
+                "units": "1", "long_name": "number of eigenvalues with real part above the tolerance"}),
+            "stability": (bdims, np.stack(fields["stability"]).astype(np.int8), {
+                "long_name": "linear stability of the stationary solution",
+                "flag_values": np.array(list(sb.STABILITY_FLAGS.values()), dtype=np.int8),
+                "flag_meanings": " ".join(sb.STABILITY_FLAGS),
+                "comment": f"tolerance on real parts: {sb.ATOL:g} s-1 + {sb.RTOL:g} * max |eigenvalue|"}),
+            "lambda_N": (bdims, np.stack(fields["lambda_N"]), {
+                "units": "N", "long_name": "normal contact force at C1 of the stationary solution"}),
+            "residual": (bdims, np.stack(fields["residual"]), {
+                "units": "1", "long_name": "max |right-hand side| of the reduced system at the stationary solution",
+                "comment": "mixed units (rad s-1, m s-2, rad s-2); round-off level: the Jacobian times the "
+                           "rounding of pi/2 (cos(pi/2) = 6e-17 in double precision)"}),
+        },
+        coords={
+            "branch": ("branch", np.array(BRANCH_NAMES), {"long_name": "stationary solution family (Fig. 6)",
+                                                          "comment": "noninverted: beta = pi/2, gamma = -pi/2; "
+                                                                     "inverted: beta = pi/2, gamma = pi/2"}),
+            "omega": ("omega", omega, {"units": "rad s-1", "long_name": "spin rate alpha_dot = Omega"}),
+            **{name: (name, values, {"units": SWEEPABLE[name][0], "long_name": SWEEPABLE[name][1]})
+               for name, values in sweeps.items()},
+            "eig": ("eig", np.arange(sb.N_EIG, dtype=np.int32), {"long_name": "eigenvalue index (by real part)"}),
+        },
+    )
+    n_found = 0
+    if critical:
+        crit = critical_speeds(ds, setup=setup, slip_smoothing=slip_smoothing)
+        ds = ds.merge(crit)
+        n_found = int(crit["n_critical"].sum())
+    config = {
+        "setup": to_dict(setup),
+        "omega": _range_config(omega),
+        **{name: _range_config(values) for name, values in sweeps.items()},
+        "slip_smoothing": slip_smoothing,
+        "reduced_state": list(st.STATE_NAMES),
+        "stability_tolerance": {"atol": sb.ATOL, "rtol": sb.RTOL},
+        "critical_rtol": CRITICAL_RTOL,
+        "heyoka_version": hy.__version__,
+    }
+    ds.attrs = make_attrs("stability_map", config, "completed",
+                          f"{ds.sizes['omega']} x {int(np.prod(shape[1:]))} points per branch"
+                          + (f"; {n_found} critical spin speeds" if critical else ""),
+                          title="Eigenvalue stability of the stationary spinning solutions of the tippedisk",
+                          model="ode-euler", paper_model="ODE Model 1 (reduced by the rotational symmetry)")
+    return ds
+
+
+def _as_axis(values, name: str) -> np.ndarray:
+    arr = np.atleast_1d(np.asarray(values, dtype=float))
+    if arr.ndim != 1 or arr.size == 0 or not np.all(np.isfinite(arr)):
+        raise ParameterError(f"{name} must be a non-empty 1-D array of finite numbers")
+    if arr.size > 1 and np.any(np.diff(arr) <= 0):
+        raise ParameterError(f"{name} values must increase strictly; give START < STOP")
+    return arr
+
+
+def _range_config(values: np.ndarray) -> dict:
+    return {"start": float(values[0]), "stop": float(values[-1]), "n": int(values.size)}
+
+
+def critical_speeds(ds: xr.Dataset, *, setup: Setup | None = None, slip_smoothing: float = 1e-12) -> xr.Dataset:
+    """Omega_c: zeros of max_real_eig along ``omega`` of a map, refined by brentq.
+
+    Returns ``omega_critical`` [rad/s] (branch, other dims, crossing), padded with
+    CRITICAL_PAD beyond ``n_critical``; ``critical_direction`` (+1: stable above Omega_c,
+    -1: unstable above, 0: padding) and ``critical_frequency`` = |Im| of the eigenvalue
+    crossing the imaginary axis [rad/s] (0 for a real eigenvalue, > 0 for a Hopf pair).
+    """
+    setup = setup or Setup()
+    other = [d for d in ds["max_real_eig"].dims if d not in ("branch", "omega")]
+    omega = ds["omega"].values
+    mre = ds["max_real_eig"].transpose("branch", *other, "omega").values
+    found = np.empty(mre.shape[:-1], dtype=object)
+    for idx in np.ndindex(*mre.shape[:-1]):
+        branch = str(ds["branch"].values[idx[0]])
+        sweeps = {d: float(ds[d].values[i]) for d, i in zip(other, idx[1:])}
+        pars = _parameter_grid(setup, {k: [v] for k, v in sweeps.items()}, slip_smoothing,
+                               (1, *([1] * len(sweeps))))[:, 0]
+        found[idx] = _roots(branch, omega, mre[idx], pars)
+    n_max = max(1, max(len(f) for f in found.flat))
+    values = np.full((*found.shape, n_max), CRITICAL_PAD)
+    direction = np.zeros((*found.shape, n_max), dtype=np.int8)
+    frequency = np.zeros((*found.shape, n_max))
+    counts = np.zeros(found.shape, dtype=np.int32)
+    for idx in np.ndindex(*found.shape):
+        counts[idx] = len(found[idx])
+        for k, (om, d, f) in enumerate(found[idx]):
+            values[(*idx, k)], direction[(*idx, k)], frequency[(*idx, k)] = om, d, f
+    cdims = ("branch", *other, "crossing")
+    return xr.Dataset({
+        "omega_critical": (cdims, values, {
+            "units": "rad s-1", "long_name": "critical spin speed Omega_c (max_real_eig changes sign)",
+            "padding_value": CRITICAL_PAD,
+            "comment": f"the first n_critical entries along crossing are valid, in increasing Omega; the rest hold "
+                       f"padding_value {CRITICAL_PAD:g}; refined by brentq to rtol {CRITICAL_RTOL:g}"}),
+        "critical_direction": (cdims, direction, {
+            "long_name": "stability change at Omega_c with increasing Omega",
+            "flag_values": np.array([-1, 0, 1], dtype=np.int8),
+            "flag_meanings": "destabilising padding stabilising"}),
+        "critical_frequency": (cdims, frequency, {
+            "units": "rad s-1", "long_name": "|imaginary part| of the eigenvalue crossing at Omega_c",
+            "comment": "0: a real eigenvalue crosses zero; > 0: a complex pair crosses (Hopf); 0 for padding"}),
+        "n_critical": (("branch", *other), counts, {
+            "units": "1", "long_name": "number of critical spin speeds found in the omega range"}),
+    }, coords={"crossing": ("crossing", np.arange(n_max, dtype=np.int32), {"long_name": "critical speed index"})})
+
+
+def _roots(branch: str, omega: np.ndarray, mre: np.ndarray, pars: np.ndarray) -> list[tuple[float, int, float]]:
+    """Sign changes of max_real_eig on the grid, refined: (Omega_c, direction, frequency)."""
+    def f(om):
+        return sb.max_real_eig(branch, om, pars)
+
+    roots = []
+    for i in range(len(omega) - 1):
+        a, b, fa, fb = omega[i], omega[i + 1], mre[i], mre[i + 1]
+        if fa * fb < 0:
+            root = brentq(f, a, b, xtol=1e-14 * max(1.0, abs(a), abs(b)), rtol=CRITICAL_RTOL, maxiter=200)
+            direction = 1 if fb < 0 else -1
+        elif fb == 0.0 and fa != 0.0:  # exactly zero on the grid: no refinement needed
+            root, direction = b, (1 if fa > 0 else -1)
+        else:
+            continue
+        ev = sb.spectrum(branch, [root], pars).eigenvalues[0]
+        roots.append((float(root), direction, float(abs(ev[0].imag))))
+    return roots
+
+
+def find_critical_speeds(branch: str, omega, setup: Setup | None = None,
+                         slip_smoothing: float = 1e-12) -> list[tuple[float, int, float]]:
+    """Critical spin speeds of one branch for one parameter set, searched on the grid ``omega``:
+    a list of (Omega_c [rad/s], direction (+1 stabilising, -1 destabilising with increasing Omega),
+    |Im s| of the crossing eigenvalue [rad/s])."""
+    from ..solvers.taylor import parameter_values
+
+    st._branch_sign(branch)
+    omega = _as_axis(omega, "omega")
+    pars = parameter_values(setup or Setup(), fall_angle=0.1, slip_smoothing=slip_smoothing)
+    return _roots(branch, omega, sb.spectrum(branch, omega, pars).max_real_eig, pars)
+
+
+def critical_speed_curves(ds: xr.Dataset) -> dict[str, xr.DataArray]:
+    """Omega_c(eps, ...) per branch with the padding masked as NaN (for plots and analysis in memory;
+    the stored dataset keeps the padding value and ``n_critical``)."""
+    valid = ds["crossing"] < ds["n_critical"]
+    masked = ds["omega_critical"].where(valid)
+    return {str(b): masked.sel(branch=b) for b in ds["branch"].values}

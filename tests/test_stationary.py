@@ -1,0 +1,87 @@
+"""Stationary spinning solutions of the reduced system (Sect. 6, Fig. 6)."""
+
+import dataclasses
+import math
+
+import heyoka as hy
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as hs
+
+from tippedisk_analysis import Disk, Friction, ParameterError, Setup
+from tippedisk_analysis.analysis import stationary as st
+from tippedisk_analysis.models import ode
+
+PARS = st.parameter_vector()
+
+
+@pytest.mark.parametrize("branch", list(st.BRANCHES))
+@settings(max_examples=25, deadline=None)
+@given(omega=hs.floats(-300, 300), eps=hs.floats(1e-3, 2.0), mu=hs.floats(0.0, 1.5), e=hs.floats(0.0, 4e-3))
+def test_stationary_solutions_are_equilibria(branch, omega, eps, mu, e):
+    setup = Setup(disk=dataclasses.replace(Disk(), e=e), friction=Friction(mu=mu, eps=eps))
+    pars = st.parameter_vector(setup)
+    x = st.stationary_state(branch, omega)
+    ev = st.evaluate(x, pars)
+    # round-off level: pi/2 is not a double (cos(pi/2) = 6e-17), so the residual is J delta with
+    # |delta| ~ 1e-16 |x|; bound it by 1e-14 |J| (1 + |x|) with the exact Jacobian of stability.py
+    from tippedisk_analysis.analysis.stability import jacobian
+
+    tol = 1e-14 * np.abs(jacobian(x, pars)).max() * (1.0 + np.abs(x).max())
+    assert np.max(np.abs(ev["rhs"])) <= tol
+    assert ev["alpha_dot"][0] == pytest.approx(omega, abs=1e-12 * (1 + abs(omega)))
+    assert np.max(np.abs(ev["slip"])) <= 1e-14 * (1 + abs(omega))  # no slip
+    # spinning about the vertical through C1, G, S: no vertical acceleration of S, lambda_N = m g
+    assert ev["lambda_N"][0] == pytest.approx(setup.disk.m * setup.gravity, rel=1e-12)
+
+
+def test_branches_match_fig6():
+    for branch, sign in (("noninverted", -1), ("inverted", 1)):
+        x = st.stationary_state(branch, [25.0])[:, 0]
+        assert x[0] == pytest.approx(math.pi / 2) and x[1] == pytest.approx(sign * math.pi / 2)
+    with pytest.raises(ParameterError, match="choose one of"):
+        st.stationary_state("upside-down", 1.0)
+
+
+def test_reduced_rhs_is_the_rotated_full_model():
+    """Symmetry reduction: the full ODE Model 1 at alpha != 0 gives the reduced rhs after rotating v_G."""
+    variables, sys, _fall, _out = ode.system(ode.EULER)
+    full = hy.cfunc([rhs for _v, rhs in sys], variables)
+    rng = np.random.default_rng(1)
+    r = Disk().r
+    for _ in range(5):
+        alpha = rng.uniform(-3, 3)
+        beta, gamma = rng.uniform(0.6, 2.5), rng.uniform(-3, 3)
+        u = rng.normal(size=2) * 0.2
+        w = rng.normal(size=3) * 20
+        beta_dot = w[0] * math.cos(gamma) - w[1] * math.sin(gamma)  # inverse of (3.3)
+        ca, sa = math.cos(alpha), math.sin(alpha)
+        v_xy = [ca * u[0] - sa * u[1], sa * u[0] + ca * u[1]]
+        state = np.array([0.3, -0.2, r * math.sin(beta), alpha, beta, gamma, *v_xy,
+                          r * math.cos(beta) * beta_dot, *w, 0.0])
+        f = full(state, pars=PARS[: full.nparams])
+        alpha_dot = f[3]
+        red = st.evaluate(np.array([beta, gamma, *u, *w]), PARS)["rhs"][:, 0]
+        a_R = [ca * f[6] + sa * f[7], -sa * f[6] + ca * f[7]]
+        expected = [f[4], f[5], a_R[0] + alpha_dot * u[1], a_R[1] - alpha_dot * u[0], *f[9:12]]
+        np.testing.assert_allclose(red, expected, rtol=1e-12, atol=1e-12 * np.max(np.abs(expected)))
+
+
+@pytest.mark.parametrize("branch", list(st.BRANCHES))
+def test_newton_converges_from_a_perturbed_guess(branch):
+    x_star = st.stationary_state(branch, [40.0])[:, 0]
+    guess = x_star + np.array([0.05, -0.08, 0.01, -0.01, 1.0, 2.0, -1.0])
+    eq = st.solve(guess, 40.0, PARS)
+    assert eq.status == "converged", eq.message
+    np.testing.assert_allclose(eq.state, x_star, atol=1e-10)
+    assert eq.residual < 1e-10
+    assert eq.lambda_N > 0
+
+
+def test_newton_reports_when_no_equilibrium_is_found():
+    eq = st.solve(np.array([1.2, 0.3, 0.0, 0.0, 5.0, 1.0, 2.0]), 40.0, PARS, max_iter=8)
+    assert eq.status in {"no_equilibrium", "max_iter", "singular", "nonfinite", "lift_off"}
+    assert not eq.converged and eq.message
+    with pytest.raises(ParameterError):
+        st.solve(np.full(7, np.nan), 40.0, PARS)
