@@ -21,7 +21,8 @@ set-valued Coulomb (2.22)/(2.28): P_T = prox_{disk(mu P_N)}(P_T - r_T xi_T);
 Coulomb-Contensou (2.24)-(2.27): (P_T, P_tau) = prox_{B_F(mu P_N)}(... - r_T xi_(T,tau)), one
 Euclidean projection (r_T used for the whole triple); smooth Coulomb (2.29):
 P_T = -mu P_N gamma_TE / (|gamma_TE| + eps), evaluated inside the iteration at the
-end-of-step slip (implicit in the slip, first order); dry pivoting (2.30) and contour friction
+end-of-step slip (implicit in the slip, first order; the update is relaxed with
+theta = 1 / (1 + mu P_N G_TT / eps) so that impacts, where mu P_N G_TT / eps exceeds 1, converge); dry pivoting (2.30) and contour friction
 (2.31): projections onto [-mu_tau P_N, mu_tau P_N] and [-mu_R P_N, mu_R P_N]. Impulses are
 warm-started from the previous step's values for contacts that stay closed.
 """
@@ -297,7 +298,13 @@ def run_chunk(q, u, exg, Pw, par, ipar, poly, n_steps, step0, out, row0, acc):
                         px, py = mt.prox_disk(P[j0 + 1] - rT * xTx, P[j0 + 2] - rT * xTy, mu * pN)
                     elif law == SMOOTH:  # (2.29) at the end-of-step slip
                         k2 = -mu * pN / (math.sqrt(gE[1] * gE[1] + gE[2] * gE[2]) + eps)
-                        px, py = k2 * gE[1], k2 * gE[2]
+                        # relaxed fixed point: theta = 1 / (1 + mu P_N G_TT / eps) makes the linear part
+                        # (|gamma_T| << eps) converge in one sweep even for impact-sized P_N; theta ~ 1
+                        # in ordinary steps (mu P_N G_TT / eps ~ 1e-4)
+                        gtt = max(Gd[j0 + 1, j0 + 1], Gd[j0 + 2, j0 + 2])
+                        theta_r = 1.0 / (1.0 + mu * pN * gtt / eps)
+                        px = P[j0 + 1] + theta_r * (k2 * gE[1] - P[j0 + 1])
+                        py = P[j0 + 2] + theta_r * (k2 * gE[2] - P[j0 + 2])
                     else:  # Coulomb-Contensou (2.24)-(2.27)
                         xtau = gE[3] + rest[3] * gA[jt]
                         px, py, ptau = mt.prox_contensou(P[j0 + 1] - rT * xTx, P[j0 + 2] - rT * xTy,
@@ -444,8 +451,12 @@ def _validate(dt, tol, store_every, max_iter, gains, fall_angle, t_end):
 def integrate(model: MoreauModel, setup: Setup, initial: InitialState, t_end: float, *, dt: float = 1e-5,
               tol: float = 1e-8, store_every: int | None = None, max_iter: int = 1000, r_N: float = 0.1,
               r_T: float = 0.1, r_tau: float = 0.1, r_R: float = 1e-4, normalize_quaternion: bool = False,
-              fall_angle: float | None = None, progress: bool | None = None):
-    """Run the step loop; returns (stored rows, status code, failures, steps, wall time, options used)."""
+              fall_angle: float | None = None, progress: bool | None = None, state=None):
+    """Run the step loop; returns (stored rows, status code, failures, steps, wall time, options used).
+
+    ``state = (q, u)`` replaces the closed rest contact of ``initial`` (e.g. a drop test):
+    q = [x, y, z, alpha, beta, gamma, 0] or [x, y, z, p0..p3], u = [v_G, Euler rates or Omega_B].
+    """
     if store_every is None:
         store_every = max(1, int(round(1e-3 / dt)))  # 1 ms sampling: 5000 samples for a 5-s run
     if fall_angle is None:
@@ -458,6 +469,10 @@ def integrate(model: MoreauModel, setup: Setup, initial: InitialState, t_end: fl
     par, ipar = parameter_vectors(model, setup, dt=dt, tol=tol, max_iter=max_iter, normalize_quaternion=
                                   normalize_quaternion, fall_angle=fall_angle, store_every=store_every, **gains)
     q, u, exg = initial_state(model, setup, initial)
+    if state is not None:
+        q, u = np.array(state[0], dtype=float), np.array(state[1], dtype=float)
+        if q.shape != (7,) or u.shape != (6,) or not (np.all(np.isfinite(q)) and np.all(np.isfinite(u))):
+            raise ParameterError("state must be (q, u) of finite values with 7 and 6 entries")
     poly = mt.contensou_polygon()
     Pw = np.zeros((3, 5))
     acc = np.zeros(5)
