@@ -19,10 +19,10 @@ def output_dir(description: str) -> Path:
     return path
 
 
-def run(out: Path, model: str, t_end: float, **options):
-    """Simulate ``model`` (Table 3 initial state, Sect. 6 parameters) and store it as <out>/<model>.nc."""
+def run(out: Path, model: str, t_end: float, tag: str = "", **options):
+    """Simulate ``model`` (Table 3 initial state, Sect. 6 parameters); store <out>/<model>_<t_end>s[_tag].nc."""
     ds = simulate(model, t_end, **options)
-    results.save(ds, out / f"{ds.attrs['model']}_{t_end:g}s.nc")
+    results.save(ds, out / f"{ds.attrs['model']}_{t_end:g}s{'_' + tag if tag else ''}.nc")
     print(f"{ds.attrs['paper_model']:>12} {ds.attrs['model']:<36} {ds.attrs['status']}: {ds.attrs['message']}"
           + (f" (wall {ds.attrs['wall_time']:.2f} s)" if "wall_time" in ds.attrs else ""))
     return ds
