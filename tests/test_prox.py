@@ -19,8 +19,8 @@ def contensou(v, rad):
 
 def in_contensou_set(v, rad, slack=1e-9):
     """Inside the polygonal ball: below the boundary eta_bar(xi_bar) of the meridian section."""
-    if rad == 0:
-        return np.allclose(v, 0)
+    if rad == 0:  # the ball of radius 0 is the origin
+        return bool(np.all(np.abs(v) <= (1e-12 if slack else 0.0)))
     a, b = math.hypot(v[0], v[1]) / rad, abs(v[2]) / rad
     if a > 1 + slack:
         return False

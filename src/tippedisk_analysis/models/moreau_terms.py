@@ -194,7 +194,7 @@ def prox_interval(x, radius):
 @njit(cache=True)
 def prox_disk(x, y, radius):
     """Projection of (x, y) onto the disk of the given radius (spatial Coulomb (2.22), (2.28))."""
-    n = math.sqrt(x * x + y * y)
+    n = math.hypot(x, y)  # no underflow of x * x for tiny x
     if n <= radius:
         return x, y
     if n == 0.0:
@@ -244,7 +244,7 @@ def prox_contensou(tx, ty, tau, radius, poly):
     """
     if radius <= 0.0:
         return 0.0, 0.0, 0.0
-    rho = math.sqrt(tx * tx + ty * ty)
+    rho = math.hypot(tx, ty)
     a = rho / radius
     b = abs(tau) / radius
     nv = poly.shape[0]
