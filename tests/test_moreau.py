@@ -209,3 +209,51 @@ def test_setup_parameters_reach_the_kernel():
     ds = simulate("m7", 0.02, setup=setup, store_every=100)
     assert float(np.max(np.abs(ds.P_Tx))) == 0.0 and float(np.max(np.abs(ds.P_R))) == 0.0
     assert float(ds.P_N[-1, 0]) > 0
+
+
+def test_flat_drop_closes_three_contacts_and_keeps_the_frame():
+    """A horizontal disk (quaternions; floating frame undefined, Sect. 2.1) lands on C1-C3 at once."""
+    model = moreau.MODELS["moreau-coulomb-quaternion"]
+    setup = Setup(friction=Friction(e_N=0.5))
+    dt = 1e-5
+    q = np.array([0.0, 0.0, 5e-6, 1.0, 0.0, 0.0, 0.0])  # flat, G 5 um above the table
+    u = np.array([0.0, 0.0, -0.2, 0.0, 0.0, 0.0])
+    rows, status, failures, steps, _, _ = moreau.integrate(model, setup, InitialState(), 2e-3, dt=dt,
+                                                           store_every=1, state=(q, u))
+    data = moreau.outputs(model, setup, rows, dt)
+    assert status == 0 and failures == 0 and steps == 200
+    assert all(np.all(np.isfinite(v)) for v in data.values())
+    k = int(np.argmax(data["n_closed"] == 3))  # impact: all three candidate points at once
+    assert k > 0 and np.all(data["P_N"][k] > 0)
+    # Newton's law (2.21) at every closed contact: the disk leaves with -e_N times its speed
+    np.testing.assert_allclose(data["z_dot"][k], -0.5 * data["z_dot"][k - 1], rtol=2e-3)
+    np.testing.assert_allclose(data["omega_x"][k:], 0.0, atol=1e-9)  # no tilting from a flat impact
+
+
+def test_nonfinite_state_ends_the_run_with_a_status(monkeypatch):
+    real = moreau.run_chunk
+
+    def failing(*args):
+        steps, rows, _ = real(*args)
+        return steps, rows, 1  # as if the state became non-finite at the end of the first chunk
+
+    monkeypatch.setattr(moreau, "run_chunk", failing)
+    ds = simulate("m5", 0.5)
+    assert ds.attrs["status"] == "nonfinite" and "non-finite" in ds.attrs["message"]
+    assert ds.attrs["t_final"] < 0.5
+    results.check_finite(ds)
+
+
+def test_step_loop_detects_a_nonfinite_state():
+    model = moreau.MODELS["moreau-smooth-quaternion"]
+    setup = Setup()
+    q, u, exg = moreau.initial_state(model, setup, InitialState())
+    u[0] = np.inf
+    par, ipar = moreau.parameter_vectors(model, setup, dt=1e-5, tol=1e-8, max_iter=100, r_N=0.1, r_T=0.1,
+                                         r_tau=0.1, r_R=1e-4, normalize_quaternion=False, fall_angle=0.0,
+                                         store_every=1)
+    out = np.zeros((5, moreau.N_COLS))
+    steps, rows, status = moreau.run_chunk(q, u, exg, np.zeros((3, 5)), par, ipar, mt.contensou_polygon(), 3, 0,
+                                           out, 0, np.zeros(5))
+    assert (steps, rows, status) == (0, 0, 1)
+    assert np.all(np.isfinite(q))  # the stored state is the last finite one

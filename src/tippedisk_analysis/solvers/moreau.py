@@ -415,9 +415,14 @@ def initial_state(model: MoreauModel, setup: Setup, initial: InitialState):
     else:
         q[3:7] = kin.quaternion_from_rotation(R)
         u[3:6] = rest["omega"]
+    return q, u, initial_frame(R)
+
+
+def initial_frame(R: np.ndarray) -> np.ndarray:
+    """e_x^G of (2.8); for a horizontal disk (undefined there) e_x^B is taken, Sect. 2.1."""
     exg = np.cross([0.0, 0.0, 1.0], R[:, 2])
-    exg /= np.linalg.norm(exg)
-    return q, u, exg
+    norm = np.linalg.norm(exg)
+    return exg / norm if norm > mt.HORIZONTAL_SIN_BETA else R[:, 0].copy()
 
 
 def parameter_vectors(model: MoreauModel, setup: Setup, *, dt: float, tol: float, max_iter: int, r_N: float,
@@ -473,6 +478,9 @@ def integrate(model: MoreauModel, setup: Setup, initial: InitialState, t_end: fl
         q, u = np.array(state[0], dtype=float), np.array(state[1], dtype=float)
         if q.shape != (7,) or u.shape != (6,) or not (np.all(np.isfinite(q)) and np.all(np.isfinite(u))):
             raise ParameterError("state must be (q, u) of finite values with 7 and 6 entries")
+        R = np.empty((3, 3))
+        _orientation(q, model.parameterization, R)
+        exg = initial_frame(R)
     poly = mt.contensou_polygon()
     Pw = np.zeros((3, 5))
     acc = np.zeros(5)
