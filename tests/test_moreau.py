@@ -257,3 +257,14 @@ def test_step_loop_detects_a_nonfinite_state():
                                            out, 0, np.zeros(5))
     assert (steps, rows, status) == (0, 0, 1)
     assert np.all(np.isfinite(q))  # the stored state is the last finite one
+
+
+def test_force_law_limits_reduce_to_set_valued_coulomb():
+    """Coulomb-Contensou -> set-valued Coulomb as the contact radius -> 0 (linearly); Models 7 = 1
+    without pivoting and contour friction."""
+    ref = simulate("m1", 0.2, store_every=1000)
+    errors = [_max_error(ref, simulate("m3", 0.2, store_every=1000,
+                                       setup=Setup(friction=Friction(contact_radius=rc)))) for rc in (1e-5, 1e-6)]
+    assert errors[1] < 2e-4 and 5 < errors[0] / errors[1] < 20
+    plain = simulate("m7", 0.2, store_every=1000, setup=Setup(friction=Friction(mu_tau=0.0, mu_R=0.0)))
+    assert _max_error(ref, plain) < 1e-12
