@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 from tippedisk_analysis.models import moreau_terms as mt
 
 coord = st.floats(min_value=-10.0, max_value=10.0, allow_nan=False)
-radius = st.floats(min_value=0.0, max_value=5.0, allow_nan=False)
+radius = st.one_of(st.just(0.0), st.floats(min_value=1e-12, max_value=5.0))
 POLY = mt.contensou_polygon()
 
 

@@ -242,7 +242,7 @@ def prox_contensou(tx, ty, tau, radius, poly):
     it moves to the nearest point of the boundary polyline; direction and signs are restored.
     Exact for the polygonal ball (129 vertices: boundary error below 1e-4 of mu P_N).
     """
-    if radius <= 0.0:
+    if radius <= 1e-290:  # the ball is the origin (and rho / radius would overflow)
         return 0.0, 0.0, 0.0
     rho = math.hypot(tx, ty)
     a = rho / radius
