@@ -268,3 +268,18 @@ def test_force_law_limits_reduce_to_set_valued_coulomb():
     assert errors[1] < 2e-4 and 5 < errors[0] / errors[1] < 20
     plain = simulate("m7", 0.2, store_every=1000, setup=Setup(friction=Friction(mu_tau=0.0, mu_R=0.0)))
     assert _max_error(ref, plain) < 1e-12
+
+
+def test_cli_simulate_moreau_model(tmp_path, capsys):
+    from tippedisk_analysis.cli import main
+
+    path = tmp_path / "m5.nc"
+    code = main(["simulate", "--model", "m5", "--t-end", "0.01", "--dt", "2e-5", "--tol", "1e-9",
+                 "--store-every", "10", "-o", str(path)])
+    assert code == 0 and "moreau-smooth-euler completed" in capsys.readouterr().out
+    ds = results.load(path)
+    config = results.config_of(ds)["integrator"]
+    assert (config["dt"], config["tol"], config["store_every"]) == (2e-5, 1e-9, 10)
+    assert ds.sizes["time"] == 51
+    assert main(["simulate", "--model", "m5", "--store-every", "0", "-o", str(tmp_path / "x.nc")]) == 2
+    assert "store_every" in capsys.readouterr().err and not (tmp_path / "x.nc").exists()
