@@ -104,7 +104,7 @@ def _orientation(q, par_kind, R):
 
 
 @njit(cache=True)
-def _advance(q, u, h, par_kind, out, tmp3, tmp4):
+def _advance(q, u, h, par_kind, out, tmp4):
     """out = q + h F(q) u: (3.8) for Euler angles (q_dot = u), (3.44) for quaternions."""
     out[0] = q[0] + h * u[0]
     out[1] = q[1] + h * u[1]
@@ -149,7 +149,6 @@ def run_chunk(q, u, exg, Pw, par, ipar, poly, n_steps, step0, out, row0, acc):
     R = np.empty((3, 3))
     qM = np.empty(7)
     qE = np.empty(7)
-    tmp3 = np.empty(3)
     tmp4 = np.empty(4)
     w = np.empty(3)
     a = np.empty(3)
@@ -173,7 +172,7 @@ def run_chunk(q, u, exg, Pw, par, ipar, poly, n_steps, step0, out, row0, acc):
     rows = 0
     for n in range(n_steps):
         # 1) midpoint (Sect. 4, step 2)
-        _advance(q, u, 0.5 * dt, par_kind, qM, tmp3, tmp4)
+        _advance(q, u, 0.5 * dt, par_kind, qM, tmp4)
         _orientation(qM, par_kind, R)
         # 2) velocities v = A(q_M) u_A = (v_S, Omega) and A_dot u_A
         if par_kind == EULER:
@@ -351,7 +350,7 @@ def run_chunk(q, u, exg, Pw, par, ipar, poly, n_steps, step0, out, row0, acc):
             u[3], u[4], u[5] = rates[0], rates[1], rates[2]
         else:
             u[3], u[4], u[5] = w[0], w[1], w[2]
-        _advance(qM, u, 0.5 * dt, par_kind, qE, tmp3, tmp4)
+        _advance(qM, u, 0.5 * dt, par_kind, qE, tmp4)
         if par_kind == QUATERNION and normalize == 1:
             nq = math.sqrt(qE[3] ** 2 + qE[4] ** 2 + qE[5] ** 2 + qE[6] ** 2)
             for k in range(4):
