@@ -31,12 +31,19 @@ def _finite_float(text: str) -> float:
 
 def _add_simulate(sub) -> None:
     p = sub.add_parser("simulate", help="simulate the tippedisk and write a netCDF dataset")
-    p.add_argument("--model", default="ode-euler", help="model name, e.g. ode-euler (ode1), ode-quaternion (ode2)")
+    p.add_argument("--model", default="ode-euler",
+                   help="model name, e.g. ode-euler (ode1), ode-quaternion (ode2), Moreau Models 1-10: m1 ... m10")
     p.add_argument("--t-end", type=_finite_float, default=5.0, help="end time [s] (default 5)")
     p.add_argument("--output", "-o", required=True, help="netCDF file to write")
     p.add_argument("--dt-output", type=_finite_float, help="output sampling [s] (default 1e-3)")
-    p.add_argument("--tol", type=_finite_float, help="integrator tolerance (default 1e-15)")
+    p.add_argument("--tol", type=_finite_float, help="tolerance: heyoka 1e-15 (ODE), prox stopping 1e-8 (Moreau)")
     p.add_argument("--fall-angle", type=_finite_float, help="tilt above the table [rad] that ends a run (default 0.1)")
+    mor = p.add_argument_group("Moreau time stepping (models m1 ... m10; Sect. 4, 6 defaults)")
+    mor.add_argument("--dt", type=_finite_float, help="time step [s] (default 1e-5)")
+    mor.add_argument("--store-every", type=int, help="store every n-th step (default: 1 ms sampling)")
+    mor.add_argument("--max-iter", type=int, help="prox iteration limit per step (default 1000)")
+    mor.add_argument("--normalize-quaternion", action="store_true", help="normalise p after each step")
+    mor.add_argument("--progress", action="store_true", default=None, help="always show a progress bar")
     init = p.add_argument_group("initial state (Table 3 defaults)")
     for name, default in (("alpha", 0.0), ("beta", "pi/2"), ("gamma0", "-pi/2 + 0.1"), ("alpha-dot", 40.0),
                           ("beta-dot", 0.0), ("gamma-dot", "-alpha_dot cos(beta)")):
@@ -64,12 +71,14 @@ def _simulate(args) -> int:
     setup = Setup(disk=dataclasses.replace(Disk(), **disk_kw), friction=dataclasses.replace(Friction(), **fric_kw),
                   **({"gravity": args.gravity} if args.gravity is not None else {}))
     options = {k: v for k, v in (("dt_output", args.dt_output), ("tol", args.tol),
-                                 ("fall_angle", args.fall_angle)) if v is not None}
+                                 ("fall_angle", args.fall_angle), ("dt", args.dt), ("store_every", args.store_every),
+                                 ("max_iter", args.max_iter), ("progress", args.progress),
+                                 ("normalize_quaternion", args.normalize_quaternion or None)) if v is not None}
     output = _writable(args.output)
     ds = simulate(info.name, args.t_end, setup=setup, initial=InitialState(**init_kw), **options)
     results.save(ds, output)
     print(f"{output}: {ds.attrs['model']} {ds.attrs['status']}: {ds.attrs['message']}")
-    return 1 if ds.attrs["status"] == "nonfinite" else 0
+    return 1 if ds.attrs["status"] in ("nonfinite", "not_converged") else 0
 
 
 def _add_plot(sub) -> None:

@@ -169,6 +169,29 @@ def stability_map_figure(ds: xr.Dataset, eps_index: int | None = None):
     return fig
 
 
+def gap_figure(datasets: dict):
+    """Gap g_N1 of the contact point C1 over time, one panel per dataset (the paper's Figs. 8, 10, 12)."""
+    fig, axes = plt.subplots(1, len(datasets), figsize=(5 * len(datasets), 3.5), constrained_layout=True,
+                             squeeze=False)
+    for ax, (label, ds) in zip(axes[0], datasets.items()):
+        ax.plot(ds["time"], ds["g_N1"], color="tab:blue", lw=0.6)
+        ax.set(xlabel="time t [s]", ylabel=r"$g_{N1}$ [m]", title=label)
+    return fig
+
+
+def comparison_figure(datasets: dict):
+    """gamma and E_tot of several runs on shared axes (the paper's Figs. 14, 15)."""
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4), constrained_layout=True)
+    for label, ds in datasets.items():
+        axes[0].plot(ds["time"], ds["gamma"], lw=0.8, label=label)
+        axes[1].plot(ds["time"], ds["E_tot"], lw=0.8, label=label)
+    axes[0].axhline(0.5 * math.pi, color="0.7", lw=0.8)
+    axes[0].set(xlabel="time t [s]", ylabel=r"$\gamma$ [rad]", title="rotation angle")
+    axes[1].set(xlabel="time t [s]", ylabel=r"$E_\mathrm{tot}$ [J]", title="total energy")
+    axes[0].legend(fontsize=8)
+    return fig
+
+
 FIGURES = {"simulation": simulation_figure, "stability_map": stability_map_figure}
 
 

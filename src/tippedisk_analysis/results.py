@@ -54,11 +54,28 @@ VARIABLES: dict[str, tuple[str, str]] = {
     "E_tot": ("J", "total energy E_kin + E_pot"),
     "P_friction": ("W", "power of the friction force at C1"),
     "W_friction": ("J", "work done by friction since t = 0"),
+    # Moreau time stepping (solvers/moreau.py)
+    "g_N2": ("m", "gap of the candidate contact point C2"),
+    "g_N3": ("m", "gap of the candidate contact point C3"),
+    "P_N": ("N s", "normal impulse of the last step of the storage interval, per contact"),
+    "P_Tx": ("N s", "tangential impulse (e_x^I) of the last step, per contact"),
+    "P_Ty": ("N s", "tangential impulse (e_y^I) of the last step, per contact"),
+    "P_tau": ("N s", "pivoting impulse (force per contact radius) of the last step, per contact"),
+    "P_R": ("N s", "contour friction impulse of the last step, per contact"),
+    "lambda_N_contact": ("N", "mean normal force P_N / dt of the last step, per contact"),
+    "lambda_Tx_contact": ("N", "mean tangential force P_Tx / dt of the last step, per contact"),
+    "lambda_Ty_contact": ("N", "mean tangential force P_Ty / dt of the last step, per contact"),
+    "lambda_tau_contact": ("N", "mean pivoting force P_tau / dt of the last step, per contact"),
+    "lambda_R_contact": ("N", "mean contour friction force P_R / dt of the last step, per contact"),
+    "n_closed": ("1", "number of closed contacts (g_N <= 0 at the midpoint) in the last step"),
+    "prox_iterations_max": ("1", "largest number of prox iterations per step in the storage interval"),
+    "prox_iterations_mean": ("1", "mean number of prox iterations per step in the storage interval"),
 }
 
 STATUS_MEANINGS = {
     "completed": "reached t_end",
     "fell": "the disk tilted down to the fall angle (sin beta -> 0, Euler singularity) and the run ended there",
+    "not_converged": "the prox iteration hit its limit in some steps (counted in convergence_failures)",
     "nonfinite": "the integrator produced a non-finite state; the dataset ends at the last finite sample",
 }
 

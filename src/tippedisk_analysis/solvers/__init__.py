@@ -73,8 +73,9 @@ def simulate(model: str = "ode-euler", t_end: float = 5.0, *, setup: Setup | Non
     if unknown:
         raise ParameterError(f"model {info.name!r} takes no option(s) {sorted(unknown)}; "
                              f"it takes {sorted(info.options)}")
-    _check_positive(options, ("dt_output", "tol", "slip_smoothing", "fall_angle", "dt"))
-    if "fall_angle" in options and not options["fall_angle"] < math.pi / 2:
+    _check_positive(options, ("dt_output", "tol", "slip_smoothing", "dt"))
+    if "fall_angle" in options and not (isinstance(options["fall_angle"], int | float)
+                                        and 0 <= options["fall_angle"] < math.pi / 2):
         raise ParameterError("fall_angle must lie in (0, pi/2) rad; give e.g. 0.1")
     return info.run(setup or Setup(), initial or InitialState(), float(t_end), **options)
 
@@ -101,3 +102,23 @@ register(ModelInfo("ode-euler", "ODE Model 1", "Euler angles, bilateral contact 
                    ("ode1",), _run_ode("ode-euler"), _ODE_OPTIONS))
 register(ModelInfo("ode-quaternion", "ODE Model 2", "quaternions, bilateral contact at C1, smooth Coulomb (heyoka)",
                    ("ode2",), _run_ode("ode-quaternion"), _ODE_OPTIONS))
+
+
+def _run_moreau(model_name: str):
+    def run(setup, initial, t_end, **options):
+        from . import moreau  # numba compiles (or loads its cache) on first use only
+
+        return moreau.run(model_name, setup, initial, t_end, **options)
+
+    return run
+
+
+def _register_moreau() -> None:
+    from .moreau import MODELS, OPTIONS
+
+    for name, model in MODELS.items():
+        register(ModelInfo(name, model.paper_name, model.description, (f"m{model.number}",),
+                           _run_moreau(name), OPTIONS))
+
+
+_register_moreau()

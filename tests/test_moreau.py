@@ -1,0 +1,285 @@
+"""Moreau time stepping (Sect. 4): kernels vs kinematics, impacts, convergence, drift, statuses."""
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from tippedisk_analysis import kinematics as kin
+from tippedisk_analysis import results, simulate
+from tippedisk_analysis.errors import ParameterError
+from tippedisk_analysis.models import moreau_terms as mt
+from tippedisk_analysis.parameters import Friction, InitialState, Setup
+from tippedisk_analysis.solvers import moreau, resolve
+
+RNG = np.random.default_rng(7)
+
+
+# ------------------------------------------------------------ kernels vs kinematics.py
+
+
+def test_kernels_match_kinematics():
+    R = np.empty((3, 3))
+    w = np.empty(3)
+    back = np.empty(3)
+    pd = np.empty(4)
+    off = np.empty((3, 3))
+    exg = np.zeros(3)
+    for _ in range(20):
+        alpha, gamma = RNG.uniform(-np.pi, np.pi, 2)
+        beta = RNG.uniform(0.2, np.pi - 0.2)
+        rates = RNG.normal(size=3) * 10
+        mt.rotation_euler(alpha, beta, gamma, R)
+        np.testing.assert_allclose(R, kin.rotation_from_euler(alpha, beta, gamma), atol=1e-15)
+        p = kin.quaternion_from_rotation(R)
+        Rq = np.empty((3, 3))
+        mt.rotation_quaternion(*p, Rq)
+        np.testing.assert_allclose(Rq, R, atol=1e-14)
+        mt.omega_from_rates(beta, gamma, *rates, w)
+        np.testing.assert_allclose(w, kin.omega_from_euler_rates(beta, gamma, rates), atol=1e-13)
+        mt.rates_from_omega(beta, gamma, w, back)
+        np.testing.assert_allclose(back, rates, atol=1e-11)
+        mt.quaternion_rates(*p, *w, pd)
+        np.testing.assert_allclose(pd, kin.quaternion_rate_entries(*p, *w), atol=1e-14)
+        mt.floating_frame(R, exg)
+        mt.contact_offsets(R, exg, 0.045, off)
+        np.testing.assert_allclose(off, kin.contact_point_offsets(R, 0.045), atol=1e-15)
+
+
+def test_jdot_and_contour_direction_from_finite_differences():
+    """J_R_dot phi_dot by central differences of (3.3); phi_dot = c . Omega equals gamma_dot (3.34)."""
+    a = np.empty(3)
+    c = np.empty(3)
+    R = np.empty((3, 3))
+    for _ in range(10):
+        beta, gamma = RNG.uniform(0.3, 2.8), RNG.uniform(-3, 3)
+        ad, bd, gd = RNG.normal(size=3) * 5
+        h = 1e-6
+        hi = kin.omega_from_euler_rates(beta + h * bd, gamma + h * gd, [ad, bd, gd])
+        lo = kin.omega_from_euler_rates(beta - h * bd, gamma - h * gd, [ad, bd, gd])
+        mt.jdot_rates(beta, gamma, ad, bd, gd, a)
+        np.testing.assert_allclose(a, (hi - lo) / (2 * h), rtol=1e-6, atol=1e-6)
+        alpha = RNG.uniform(-3, 3)
+        mt.rotation_euler(alpha, beta, gamma, R)
+        mt.contour_direction(R, math.sin(beta), c)
+        omega = kin.omega_from_euler_rates(beta, gamma, [ad, bd, gd])
+        assert math.isclose(c @ omega, gd, rel_tol=1e-10, abs_tol=1e-10)
+
+
+def test_floating_frame_continuity_when_horizontal():
+    """Sect. 2.1: for R33 = 1 the previous e_x^G is kept (made orthogonal to e_z^B), never NaN."""
+    exg = np.array([0.6, 0.8, 0.0])
+    R = np.eye(3)
+    assert mt.floating_frame(R, exg) == 0.0
+    np.testing.assert_allclose(exg, [0.6, 0.8, 0.0])
+    off = np.empty((3, 3))
+    mt.contact_offsets(R, exg, 0.045, off)
+    assert np.all(np.isfinite(off)) and np.allclose(off[:, 2], 0.0)
+    np.testing.assert_allclose(np.linalg.norm(off, axis=1), 0.045)
+
+
+# ------------------------------------------------------------ physics
+
+
+def _drop_state(model, beta, height, v0):
+    """Tilted disk, no rotation, C1 a distance ``height`` above the table, falling with v0 < 0."""
+    r = Setup().disk.r
+    q = np.zeros(7)
+    q[2] = r * math.sin(beta) + height
+    if model.parameterization == moreau.EULER:
+        q[3:6] = 0.0, beta, 0.0
+    else:
+        q[3:7] = kin.quaternion_from_rotation(kin.rotation_from_euler(0.0, beta, 0.0))
+    u = np.zeros(6)
+    u[2] = v0
+    return q, u
+
+
+@pytest.mark.parametrize("name", ["moreau-coulomb-euler", "moreau-smooth-quaternion"])
+@pytest.mark.parametrize("e_N", [0.0, 0.5])
+def test_drop_and_impact_newton_restitution(name, e_N):
+    """Newton's impact law (2.21) on velocity level: gamma_N1^+ = -e_N gamma_N1^- at the impact step."""
+    model = moreau.MODELS[name]
+    setup = Setup(friction=Friction(e_N=e_N))
+    dt = 1e-5
+    state = _drop_state(model, beta=1.2, height=2e-5, v0=-0.3)
+    rows, status, failures, steps, _, _ = moreau.integrate(model, setup, InitialState(), 3e-4, dt=dt,
+                                                           store_every=1, state=state)
+    data = moreau.outputs(model, setup, rows, dt)
+    assert status == 0 and failures == 0
+    k = int(np.argmax(data["P_N"][:, 0] > 0))  # the impact step
+    assert k > 0 and data["P_N"][k, 0] > 0
+    assert np.all(data["P_N"][:k, 0] == 0)  # free flight before
+    pre, post = data["gamma_N1"][k - 1], data["gamma_N1"][k]
+    assert pre < -0.29
+    # post-impact normal velocity; the impact step itself adds gravity dt (1e-4 m/s)
+    assert abs(post - (-e_N * pre)) < 2e-3 * abs(pre)
+    # only C1 touches the table; C2, C3 stay far above
+    assert np.all(data["g_N2"] > 1e-3) and np.all(data["g_N3"] > 1e-3)
+
+
+def _max_error(a, b, names=("alpha", "beta", "gamma")):
+    return max(float(np.max(np.abs(a[v].values - b[v].values))) for v in names)
+
+
+@pytest.mark.parametrize("moreau_name, ode_name", [("m5", "ode-euler"), ("m6", "ode-quaternion")])
+def test_smooth_coulomb_converges_first_order_to_ode(moreau_name, ode_name):
+    """Models 5/6 -> heyoka ODE Models 1/2 with first order in dt (error ratio ~2 per halving)."""
+    t_end = 0.2
+    ref = simulate(ode_name, t_end, dt_output=1e-3)
+    errors = []
+    for dt in (4e-5, 2e-5, 1e-5):
+        ds = simulate(moreau_name, t_end, dt=dt, store_every=int(round(1e-3 / dt)))
+        np.testing.assert_allclose(ds.time.values, ref.time.values, atol=1e-12)
+        errors.append(_max_error(ds, ref))
+    ratios = errors[0] / errors[1], errors[1] / errors[2]
+    assert all(1.8 < ratio < 2.2 for ratio in ratios), (errors, ratios)
+    assert errors[-1] < 2e-3
+
+
+def test_euler_and_quaternion_models_agree():
+    """Models 1 and 2 (set-valued Coulomb) describe the same motion; normalisation removes the drift."""
+    e = simulate("m1", 0.2)
+    q = simulate("m2", 0.2, normalize_quaternion=True)
+    assert _max_error(e, q) < 2e-4
+    assert float(np.max(np.abs(q.quaternion_norm_error))) < 1e-12
+    np.testing.assert_allclose(e.E_tot, q.E_tot, rtol=1e-4)
+
+
+def test_constraint_drift_euler_vs_quaternion():
+    """Fig. 8: Euler gap chatters at the 1e-9 m level; unnormalised quaternions drift downwards."""
+    e = simulate("m1", 0.3)
+    q = simulate("m2", 0.3)
+    assert float(np.max(np.abs(e.g_N1))) < 5e-9
+    assert float(q.g_N1[-1]) < -1e-6  # drift (paper: -1.36e-5 m saturation for Model 4)
+    assert float(q.quaternion_norm_error[-1]) > 0  # |p| grows: rotation no longer orthogonal
+    assert e.attrs["status"] == "completed" and e.attrs["convergence_failures"] == 0
+
+
+@pytest.mark.parametrize("name", [f"m{i}" for i in range(1, 11)])
+def test_every_model_runs_dissipates_and_stores_a_valid_dataset(name, tmp_path):
+    ds = simulate(name, 0.05, store_every=100)
+    assert ds.attrs["status"] == "completed"
+    assert ds.sizes["time"] == 51 and ds.sizes["contact"] == 3
+    E = ds.E_tot.values
+    assert E[-1] < E[0] + 1e-6  # friction never feeds energy in (within the scheme's O(dt) error)
+    assert float(ds.lambda_N[-1]) > 0 and int(ds.n_closed[-1]) == 1
+    info = resolve(name)
+    assert info.paper_name == f"Model {name[1:]}"
+    results.check_finite(ds)
+    path = results.save(ds, tmp_path / "run.nc")
+    xr.testing.assert_identical(results.load(path), ds)
+
+
+def test_pivoting_and_contour_friction_dissipate_more():
+    """Fig. 14 right: the extra mechanisms of Models 8/10 dissipate more than Models 2/6."""
+    e2 = float(simulate("m2", 0.3, store_every=1000).E_tot[-1])
+    e8 = float(simulate("m8", 0.3, store_every=1000).E_tot[-1])
+    e6 = float(simulate("m6", 0.3, store_every=1000).E_tot[-1])
+    e10 = float(simulate("m10", 0.3, store_every=1000).E_tot[-1])
+    assert e8 < e2 and e10 < e6
+
+
+def test_iteration_limit_is_reported_not_silent():
+    ds = simulate("m3", 0.01, max_iter=1, tol=1e-15)
+    assert ds.attrs["status"] == "not_converged"
+    assert ds.attrs["convergence_failures"] > 0 and "max_iter" in ds.attrs["message"]
+
+
+def test_euler_model_ends_with_status_near_horizontal():
+    ds = simulate("m1", 0.01, initial=InitialState(beta=0.05, gamma=0.0, alpha_dot=0.0), fall_angle=0.1)
+    assert ds.attrs["status"] == "fell" and ds.attrs["n_steps"] == 0
+    results.check_finite(ds)
+
+
+@pytest.mark.parametrize("options, word", [({"dt": -1e-5}, "dt"), ({"store_every": 0}, "store_every"),
+                                           ({"max_iter": 2.5}, "max_iter"), ({"r_N": 0.0}, "r_N"),
+                                           ({"dt": 0.1}, "dt"), ({"fall_angle": 2.0}, "fall_angle"),
+                                           ({"dt_output": 1e-3}, "dt_output")])
+def test_bad_options_raise_parameter_error(options, word):
+    with pytest.raises(ParameterError, match=word):
+        simulate("m1", 0.01, **options)
+
+
+def test_setup_parameters_reach_the_kernel():
+    """Gravity and friction of Setup are used: no friction -> no tangential impulse."""
+    setup = Setup(friction=dataclasses.replace(Friction(), mu=0.0, mu_tau=0.0, mu_R=0.0))
+    ds = simulate("m7", 0.02, setup=setup, store_every=100)
+    assert float(np.max(np.abs(ds.P_Tx))) == 0.0 and float(np.max(np.abs(ds.P_R))) == 0.0
+    assert float(ds.P_N[-1, 0]) > 0
+
+
+def test_flat_drop_closes_three_contacts_and_keeps_the_frame():
+    """A horizontal disk (quaternions; floating frame undefined, Sect. 2.1) lands on C1-C3 at once."""
+    model = moreau.MODELS["moreau-coulomb-quaternion"]
+    setup = Setup(friction=Friction(e_N=0.5))
+    dt = 1e-5
+    q = np.array([0.0, 0.0, 5e-6, 1.0, 0.0, 0.0, 0.0])  # flat, G 5 um above the table
+    u = np.array([0.0, 0.0, -0.2, 0.0, 0.0, 0.0])
+    rows, status, failures, steps, _, _ = moreau.integrate(model, setup, InitialState(), 2e-3, dt=dt,
+                                                           store_every=1, state=(q, u))
+    data = moreau.outputs(model, setup, rows, dt)
+    assert status == 0 and failures == 0 and steps == 200
+    assert all(np.all(np.isfinite(v)) for v in data.values())
+    k = int(np.argmax(data["n_closed"] == 3))  # impact: all three candidate points at once
+    assert k > 0 and np.all(data["P_N"][k] > 0)
+    # Newton's law (2.21) at every closed contact: the disk leaves with -e_N times its speed
+    np.testing.assert_allclose(data["z_dot"][k], -0.5 * data["z_dot"][k - 1], rtol=2e-3)
+    np.testing.assert_allclose(data["omega_x"][k:], 0.0, atol=1e-9)  # no tilting from a flat impact
+
+
+def test_nonfinite_state_ends_the_run_with_a_status(monkeypatch):
+    real = moreau.run_chunk
+
+    def failing(*args):
+        steps, rows, _ = real(*args)
+        return steps, rows, 1  # as if the state became non-finite at the end of the first chunk
+
+    monkeypatch.setattr(moreau, "run_chunk", failing)
+    ds = simulate("m5", 0.5)
+    assert ds.attrs["status"] == "nonfinite" and "non-finite" in ds.attrs["message"]
+    assert ds.attrs["t_final"] < 0.5
+    results.check_finite(ds)
+
+
+def test_step_loop_detects_a_nonfinite_state():
+    model = moreau.MODELS["moreau-smooth-quaternion"]
+    setup = Setup()
+    q, u, exg = moreau.initial_state(model, setup, InitialState())
+    u[0] = np.inf
+    par, ipar = moreau.parameter_vectors(model, setup, dt=1e-5, tol=1e-8, max_iter=100, r_N=0.1, r_T=0.1,
+                                         r_tau=0.1, r_R=1e-4, normalize_quaternion=False, fall_angle=0.0,
+                                         store_every=1)
+    out = np.zeros((5, moreau.N_COLS))
+    steps, rows, status = moreau.run_chunk(q, u, exg, np.zeros((3, 5)), par, ipar, mt.contensou_polygon(), 3, 0,
+                                           out, 0, np.zeros(5))
+    assert (steps, rows, status) == (0, 0, 1)
+    assert np.all(np.isfinite(q))  # the stored state is the last finite one
+
+
+def test_force_law_limits_reduce_to_set_valued_coulomb():
+    """Coulomb-Contensou -> set-valued Coulomb as the contact radius -> 0 (linearly); Models 7 = 1
+    without pivoting and contour friction."""
+    ref = simulate("m1", 0.2, store_every=1000)
+    errors = [_max_error(ref, simulate("m3", 0.2, store_every=1000,
+                                       setup=Setup(friction=Friction(contact_radius=rc)))) for rc in (1e-5, 1e-6)]
+    assert errors[1] < 2e-4 and 5 < errors[0] / errors[1] < 20
+    plain = simulate("m7", 0.2, store_every=1000, setup=Setup(friction=Friction(mu_tau=0.0, mu_R=0.0)))
+    assert _max_error(ref, plain) < 1e-12
+
+
+def test_cli_simulate_moreau_model(tmp_path, capsys):
+    from tippedisk_analysis.cli import main
+
+    path = tmp_path / "m5.nc"
+    code = main(["simulate", "--model", "m5", "--t-end", "0.01", "--dt", "2e-5", "--tol", "1e-9",
+                 "--store-every", "10", "-o", str(path)])
+    assert code == 0 and "moreau-smooth-euler completed" in capsys.readouterr().out
+    ds = results.load(path)
+    config = results.config_of(ds)["integrator"]
+    assert (config["dt"], config["tol"], config["store_every"]) == (2e-5, 1e-9, 10)
+    assert ds.sizes["time"] == 51
+    assert main(["simulate", "--model", "m5", "--store-every", "0", "-o", str(tmp_path / "x.nc")]) == 2
+    assert "store_every" in capsys.readouterr().err and not (tmp_path / "x.nc").exists()
