@@ -126,8 +126,8 @@ def _max_error(a, b, names=("alpha", "beta", "gamma")):
 
 @pytest.mark.parametrize("moreau_name, ode_name", [("m5", "ode-euler"), ("m6", "ode-quaternion")])
 def test_smooth_coulomb_converges_first_order_to_ode(moreau_name, ode_name):
-    """Models 5/6 -> heyoka ODE Models 1/2 with first order in dt (error ratio ~2 per halving)."""
-    t_end = 0.2
+    """Models 5/6 -> heyoka ODE Models 1/2 on [0, 1] s with first order in dt (error ratio ~2 per halving)."""
+    t_end = 1.0  # the interval of issue 3
     ref = simulate(ode_name, t_end, dt_output=1e-3)
     errors = []
     for dt in (4e-5, 2e-5, 1e-5):
@@ -136,7 +136,7 @@ def test_smooth_coulomb_converges_first_order_to_ode(moreau_name, ode_name):
         errors.append(_max_error(ds, ref))
     ratios = errors[0] / errors[1], errors[1] / errors[2]
     assert all(1.8 < ratio < 2.2 for ratio in ratios), (errors, ratios)
-    assert errors[-1] < 2e-3
+    assert errors[-1] < 0.05  # rad at dt = 1e-5 s
 
 
 def test_euler_and_quaternion_models_agree():
