@@ -1,0 +1,1 @@
+"""Analysis of whole trajectories: Poincaré sections, outcome maps, bifurcation diagrams."""
