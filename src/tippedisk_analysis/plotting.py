@@ -101,7 +101,7 @@ def outcome_map_figure(ds: xr.Dataset):
 def bifurcation_figure(ds: xr.Dataset):
     """Brute-force bifurcation diagram: the recorded quantity at the crossings against Omega."""
     fig, ax = plt.subplots(figsize=(8, 5), constrained_layout=True)
-    ax.plot(ds["omega_of_point"], ds["value"], ",", color="k", marker=".", markersize=1.5, linestyle="none")
+    ax.plot(ds["omega_of_point"], ds["value"], ".", color="k", markersize=2, linestyle="none")
     ax.set(xlabel=r"initial spin $\Omega$ [rad/s]",
            ylabel=f"{ds.attrs.get('quantity', '')} [{ds['value'].attrs.get('units', '')}]",
            title=f"crossings of {ds.attrs.get('section', '')} ({ds.attrs.get('direction', '')}) after transients")

@@ -22,6 +22,7 @@ from ..results import VARIABLES, describe, make_attrs
 from . import poincare
 
 STATUS = {"completed": 0, "fell": 1, "nonfinite": 2}
+ANGLES = ("alpha", "gamma")  # stored wrapped into (-pi, pi] as ``value``
 
 
 def bifurcation_diagram(omega, *, quantity: str = "gamma", section: str = "beta_dot=0", direction: str = "positive",
@@ -48,14 +49,18 @@ def bifurcation_diagram(omega, *, quantity: str = "gamma", section: str = "beta_
                                        fall_angle=fall_angle)
         n_cross.append(ds.sizes["crossing"])
         status.append(STATUS[ds.attrs["status"]])
-        rows.append((np.full(ds.sizes["crossing"], om), ds["time"].values, ds[quantity].values,
+        value = ds[quantity].values
+        if quantity in ANGLES:  # unwrapped angles: wrap into (-pi, pi] to compare crossings
+            value = np.pi - np.mod(np.pi - value, 2 * np.pi)
+        rows.append((np.full(ds.sizes["crossing"], om), ds["time"].values, value,
                      ds["beta"].values, ds["gamma"].values))
     cols = [np.concatenate([r[k] for r in rows]) for k in range(5)]
     units, long_name = VARIABLES.get(quantity, ("1", quantity))
     data = {
         "omega_of_point": ("point", cols[0], {"units": "rad s-1", "long_name": "initial spin Omega of the crossing"}),
         "time": ("point", cols[1]),
-        "value": ("point", cols[2], {"units": units, "long_name": f"{quantity} at the crossing ({long_name})"}),
+        "value": ("point", cols[2], {"units": units, "long_name": f"{quantity} at the crossing ({long_name})"
+                                                + (", wrapped into (-pi, pi]" if quantity in ANGLES else "")}),
         "beta": ("point", cols[3]),
         "gamma": ("point", cols[4]),
         "n_crossings": ("omega", np.array(n_cross, dtype=np.int64),
