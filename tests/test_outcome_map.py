@@ -67,6 +67,31 @@ def test_classification_follows_the_paper():
     assert flags["flag_meanings"].split() == list(om.OUTCOMES)
 
 
+def test_outcome_follows_the_documented_rules():
+    """Re-derive every outcome from the stored variables with the rules of the module docstring."""
+    cfg = om.MapConfig(ranges={"omega": (5.0, 80.0, 8), "eps": (0.02, 0.3, 4)}, t_end=1.5, chunk_size=16)
+    r = om.run_chunk(cfg, 0, cfg.n_points)
+    assert len(set(r["outcome"])) >= 3  # several classes occur on this grid
+    for i in range(cfg.n_points):
+        if r["fall_time"][i] != om.FILL_TIME:
+            expected = "fell"
+        elif abs(r["gamma_turns"][i]) >= 1:
+            expected = "rolling"
+        elif r["sin_gamma_mean"][i] >= cfg.threshold:
+            expected = "inverted"
+        elif r["sin_gamma_mean"][i] <= -cfg.threshold:
+            expected = "not_inverted"
+        else:
+            expected = "undecided"
+        assert r["outcome"][i] == om.OUTCOMES[expected], i
+        assert (r["fall_time"][i] == om.FILL_TIME) == (r["t_final"][i] == cfg.t_end)
+        # every run started with S below G: an inversion time exists iff gamma ever reached 0 from below
+        if r["inversion_time"][i] == om.FILL_TIME:
+            assert expected in ("fell", "not_inverted", "undecided")
+        else:
+            assert 0 < r["inversion_time"][i] <= r["t_final"][i]
+
+
 def test_round_trip_and_dims(tmp_path):
     ds = om.outcome_map({"omega": (30, 50, 3), "eps": (0.05, 0.1, 2), "mu": (0.2, 0.3, 2)}, t_end=0.3,
                         progress=False, output=tmp_path / "m.nc")

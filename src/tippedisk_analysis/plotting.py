@@ -78,7 +78,9 @@ def outcome_map_figure(ds: xr.Dataset):
     out = ds["outcome"].isel(sel)
     values = [int(v) for v in ds["outcome"].attrs["flag_values"]]
     meanings = ds["outcome"].attrs["flag_meanings"].split()
-    cmap = ListedColormap(["tab:blue", "tab:green", "tab:red", "tab:gray", "black"][: len(values)])
+    palette = {"not_inverted": "tab:blue", "inverted": "tab:green", "fell": "tab:red", "undecided": "tab:gray",
+               "failed": "black", "rolling": "tab:orange"}
+    cmap = ListedColormap([palette.get(m, "tab:purple") for m in meanings])
     norm = BoundaryNorm([v - 0.5 for v in values] + [values[-1] + 0.5], cmap.N)
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), constrained_layout=True)
     x, y = dims[0], dims[1]

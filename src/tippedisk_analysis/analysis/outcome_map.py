@@ -9,6 +9,8 @@ Classification (``outcome``, int8, see :data:`OUTCOMES`), checked in this order:
 * ``failed``: the integrator produced a non-finite state;
 * ``fell``: the tilt asin(sin beta) reached ``fall_angle`` before ``t_end`` (the Euler
   angles are singular at sin beta = 0, the run ends there);
+* ``rolling``: the run reached ``t_end`` and gamma turned by at least 2 pi within the
+  classification window (the disk rolls over its rim instead of settling: slow spins);
 * ``inverted``: the run reached ``t_end`` and the mean of sin(gamma) over the
   classification window [t_end - window, t_end] is >= ``threshold`` (0.9): the centre of
   gravity S stayed above G (z_S - z_G = e sin(beta) sin(gamma), gamma near +pi/2);
@@ -44,7 +46,7 @@ from ..parameters import Disk, Friction, InitialState, Setup, to_dict
 from ..results import describe, make_attrs
 
 MODEL = "ode-euler"
-OUTCOMES = {"not_inverted": 0, "inverted": 1, "fell": 2, "undecided": 3, "failed": 4}
+OUTCOMES = {"not_inverted": 0, "inverted": 1, "fell": 2, "undecided": 3, "failed": 4, "rolling": 5}
 FILL_TIME = -1.0
 
 # swept name: (units, long_name, default from Tables 1-3)
@@ -239,6 +241,7 @@ RESULT_VARIABLES = {
     "inversion_time": (float, "s", "first upward crossing of gamma = 0 (fill -1: none)"),
     "fall_time": (float, "s", "time the tilt reached fall_angle (fill -1: did not fall)"),
     "t_final": (float, "s", "time the run ended"),
+    "gamma_turns": (float, "1", "(gamma(t_final) - gamma(window start)) / (2 pi)"),
     "sin_gamma_mean": (float, "1", "time mean of sin(gamma) over the classification window"),
     "z_S_mean": (float, "m", "time mean of z_S over the classification window"),
     "E_tot_final": (float, "J", "total energy at t_final"),
@@ -281,6 +284,8 @@ def _finish(config: MapConfig, k: BatchKernel, raw: dict, pars: np.ndarray) -> d
     outcome = np.full(t_final.shape, OUTCOMES["undecided"], dtype=np.int8)
     outcome[sin_mean >= config.threshold] = OUTCOMES["inverted"]
     outcome[sin_mean <= -config.threshold] = OUTCOMES["not_inverted"]
+    turns = (final[ode.EULER.state_names.index("gamma")] - raw["gamma_window"]) / (2 * math.pi)
+    outcome[np.abs(turns) >= 1.0] = OUTCOMES["rolling"]
     outcome[raw["fell"]] = OUTCOMES["fell"]
     outcome[raw["failed"]] = OUTCOMES["failed"]
     res = {
@@ -288,6 +293,7 @@ def _finish(config: MapConfig, k: BatchKernel, raw: dict, pars: np.ndarray) -> d
         "inversion_time": raw["inversion_time"],
         "fall_time": np.where(raw["fell"], t_final, FILL_TIME),
         "t_final": t_final,
+        "gamma_turns": turns,
         "sin_gamma_mean": sin_mean,
         "z_S_mean": zs_mean,
         "E_tot_final": o["E_kin"] + o["E_pot"],
@@ -317,14 +323,13 @@ def run_chunk(config: MapConfig | dict, start: int, stop: int) -> dict:
     x0, pars = _prepare(config, start, stop)
     n = stop - start
     raw = {"final_state": np.empty_like(x0), "t_final": np.empty(n), "t_window": np.empty(n),
-           "q_window": np.zeros((2, n)), "fell": np.zeros(n, bool), "failed": np.zeros(n, bool),
-           "inversion_time": np.full(n, FILL_TIME)}
-    ta_template = copy.copy(k.integrator)
+           "q_window": np.zeros((2, n)), "gamma_window": np.empty(n), "fell": np.zeros(n, bool),
+           "failed": np.zeros(n, bool), "inversion_time": np.full(n, FILL_TIME)}
+    ta_template = copy.copy(k.integrator)  # one integrator per chunk, reused batch after batch
     for b0 in range(0, n, B):
         lanes = np.arange(b0, min(b0 + B, n))
         idx = np.concatenate([lanes, np.full(B - len(lanes), lanes[-1])])  # pad with the last point
-        ta = ta_template if b0 + B >= n else ta_template  # one integrator per chunk, reused
-        res = _run_batch(ta, x0[:, idx], pars[:, idx], config)
+        res = _run_batch(ta_template, x0[:, idx], pars[:, idx], config)
         m = len(lanes)
         for key, val in res.items():
             raw[key][..., lanes] = val[..., :m]
@@ -349,6 +354,8 @@ def _run_batch(ta, x0: np.ndarray, pars: np.ndarray, config: MapConfig) -> dict:
     q_window = np.zeros((2, B))
     t_window = np.zeros(B)  # window start actually used (0 if the run ended before it)
     n_state = x0.shape[0] - 2
+    i_gamma = ode.EULER.state_names.index("gamma")
+    gamma_window = x0[i_gamma].copy()
 
     def advance(t_target):
         while True:
@@ -386,13 +393,14 @@ def _run_batch(ta, x0: np.ndarray, pars: np.ndarray, config: MapConfig) -> dict:
         advance(t_w)
         alive = ~done
         q_window[:, alive] = ta.state[n_state:, alive]
+        gamma_window[alive] = ta.state[i_gamma, alive]
         t_window[alive] = t_w
     advance(config.t_end)
     alive = ~done
     final[:, alive] = ta.state[:, alive]
     t_final[alive] = ta.time[alive]
     return {"final_state": final, "t_final": t_final, "t_window": t_window, "q_window": q_window,
-            "fell": fell, "failed": failed, "inversion_time": rec.first.copy()}
+            "gamma_window": gamma_window, "fell": fell, "failed": failed, "inversion_time": rec.first.copy()}
 
 
 def run_chunk_scalar(config: MapConfig | dict, start: int, stop: int) -> dict:
@@ -404,10 +412,11 @@ def run_chunk_scalar(config: MapConfig | dict, start: int, stop: int) -> dict:
     k = kernel(float(config.tol))
     x0, pars = _prepare(config, start, stop)
     n = stop - start
-    raw = {"final_state": np.empty_like(x0), "t_final": np.empty(n), "t_window": np.zeros(n),
-           "q_window": np.zeros((2, n)), "fell": np.zeros(n, bool), "failed": np.zeros(n, bool),
-           "inversion_time": np.full(n, FILL_TIME)}
     n_state = x0.shape[0] - 2
+    i_gamma = ode.EULER.state_names.index("gamma")
+    raw = {"final_state": np.empty_like(x0), "t_final": np.empty(n), "t_window": np.zeros(n),
+           "q_window": np.zeros((2, n)), "gamma_window": x0[i_gamma].copy(), "fell": np.zeros(n, bool),
+           "failed": np.zeros(n, bool), "inversion_time": np.full(n, FILL_TIME)}
     t_w = config.t_end - config.window
     ta = copy.copy(k.scalar)
     for i in range(n):
@@ -417,20 +426,18 @@ def run_chunk_scalar(config: MapConfig | dict, start: int, stop: int) -> dict:
         ta.reset_cooldowns()
         rec = ta.nt_events[0].callback
         rec.first = FILL_TIME
-        ended = False
         for t_target in ((t_w,) if t_w > 0 else ()) + (config.t_end,):
             oc = ta.propagate_until(t_target)[0]
             if oc != hy.taylor_outcome.time_limit:
                 raw["fell" if int(oc) == -1 else "failed"][i] = True
-                ended = True
                 break
             if t_target == t_w:
                 raw["q_window"][:, i] = ta.state[n_state:]
+                raw["gamma_window"][i] = ta.state[i_gamma]
                 raw["t_window"][i] = t_w
         raw["final_state"][:, i] = ta.state
         raw["t_final"][i] = ta.time
         raw["inversion_time"][i] = rec.first
-        del ended
     return _finish(config, k, raw, pars)
 
 
@@ -450,7 +457,8 @@ def assemble(config: MapConfig, results: dict) -> xr.Dataset:
         flag_meanings=" ".join(OUTCOMES),
         classification=("failed: non-finite state; fell: tilt reached fall_angle before t_end; "
                         f"inverted: mean sin(gamma) over [t_end - window, t_end] >= {config.threshold}; "
-                        f"not_inverted: that mean <= -{config.threshold}; undecided: otherwise"),
+                        f"not_inverted: that mean <= -{config.threshold}; rolling (checked before those two): "
+                        "gamma turned by >= 2 pi within the window; undecided: otherwise"),
     )
     coords = {}
     for name, values in axes.items():
