@@ -182,3 +182,23 @@ def test_cli_writes_and_plots(tmp_path):
     assert main(["outcome-map", "--omega", "30:50:2", "--eps", "0.1:0.2:2", "--t-end", "0.3", "-o", str(out)]) == 0
     assert load(out).attrs["kind"] == "outcome_map"
     assert main(["plot", str(out)]) == 0 and out.with_suffix(".png").stat().st_size > 0
+
+
+def test_cli_scheduler_address(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    out = tmp_path / "m.nc"
+    argv = ["outcome-map", "--omega", "30:50:2", "--eps", "0.1:0.2:2", "--t-end", "0.3", "-o", str(out)]
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster:
+        assert main([*argv, "--scheduler", cluster.scheduler_address]) == 0
+    on_cluster = load(out)
+    assert main(argv) == 0
+    xr.testing.assert_identical(on_cluster, load(out))
+
+
+def test_cli_unreachable_scheduler_exits_2_without_file(tmp_path, capsys):
+    out = tmp_path / "m.nc"
+    argv = ["outcome-map", "--omega", "30:50:2", "--eps", "0.1:0.2:2", "-o", str(out), "--scheduler", "tcp://127.0.0.1:9"]
+    assert _exit_code(argv) == 2
+    assert not out.exists() and not sweeps.chunk_dir(out).exists()
+    assert "dask scheduler" in capsys.readouterr().err

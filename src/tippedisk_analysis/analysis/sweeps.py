@@ -84,8 +84,8 @@ def _client(scheduler: str):
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
         return Client(cluster), cluster
     try:
-        return Client(scheduler, timeout="10s"), None
-    except OSError as exc:
+        return Client(scheduler, timeout="3s"), None
+    except (OSError, ValueError) as exc:
         raise ParameterError(f"cannot reach the dask scheduler {scheduler!r} ({exc}); "
                              "check the address (e.g. tcp://host:8786)") from None
 
@@ -99,9 +99,22 @@ def run_sweep(config: om.MapConfig, *, output=None, scheduler=None, threads: int
     processes; any other string -> the address of a dask scheduler.
     ``on_chunk(index)`` is called after each newly computed chunk is stored (tests, logging).
     """
+    bounds = chunk_bounds(config)
+    client, cluster = None, None
+    if scheduler is not None:  # connect first: a bad address leaves nothing behind
+        client, cluster = (scheduler, None) if hasattr(scheduler, "submit") else _client(str(scheduler))
+    try:
+        return _run(config, bounds, output, client, threads, progress, on_chunk)
+    finally:
+        if client is not None and client is not scheduler:
+            client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def _run(config, bounds, output, client, threads, progress, on_chunk) -> xr.Dataset:
     from tqdm import tqdm
 
-    bounds = chunk_bounds(config)
     d = _prepare_dir(config, output) if output is not None else None
     results: dict[int, dict] = {}
     if d is not None:
@@ -112,7 +125,6 @@ def run_sweep(config: om.MapConfig, *, output=None, scheduler=None, threads: int
                 if r is not None:
                     results[i] = r
     todo = [i for i in range(len(bounds)) if i not in results]
-    cfg = config.to_dict()
     bar = tqdm(total=config.n_points, initial=sum(bounds[i][1] - bounds[i][0] for i in results), unit="run",
                desc="outcome map", file=sys.stderr, delay=2.0, disable=not progress, dynamic_ncols=True)
 
@@ -125,13 +137,18 @@ def run_sweep(config: om.MapConfig, *, output=None, scheduler=None, threads: int
             on_chunk(i)
 
     try:
-        if scheduler is None:
+        if client is None:
             with ThreadPoolExecutor(max_workers=threads or min(len(todo), os.cpu_count() or 1) or 1) as ex:
                 futures = {ex.submit(om.run_chunk, config, *bounds[i]): i for i in todo}
                 for fut in as_completed(futures):
                     store(futures[fut], fut.result())
         else:
-            _run_dask(scheduler, cfg, bounds, todo, store)
+            from distributed import as_completed as dask_completed
+
+            cfg = config.to_dict()  # plain data: workers rebuild the config and compile their own kernel
+            futures = {client.submit(om.run_chunk, cfg, *bounds[i], pure=False): i for i in todo}
+            for fut in dask_completed(list(futures)):
+                store(futures[fut], fut.result())
     finally:
         bar.close()
     merged = {k: np.concatenate([results[i][k] for i in range(len(bounds))]) for k in om.RESULT_VARIABLES}
@@ -142,24 +159,6 @@ def run_sweep(config: om.MapConfig, *, output=None, scheduler=None, threads: int
         save(ds, output)
         shutil.rmtree(d, ignore_errors=True)
     return ds
-
-
-def _run_dask(scheduler, cfg: dict, bounds, todo, store) -> None:
-    from distributed import as_completed as dask_completed
-
-    own = None
-    client = scheduler if hasattr(scheduler, "submit") else None
-    if client is None:
-        client, own = _client(str(scheduler))
-    try:
-        futures = {client.submit(om.run_chunk, cfg, *bounds[i], pure=False): i for i in todo}
-        for fut in dask_completed(list(futures)):
-            store(futures[fut], fut.result())
-    finally:
-        if client is not scheduler:
-            client.close()
-        if own is not None:
-            own.close()
 
 
 def load_chunks_config(output) -> dict:
