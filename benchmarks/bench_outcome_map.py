@@ -35,12 +35,16 @@ def main() -> None:
 
     cfg = om.MapConfig(ranges={"omega": (5.0, 80.0, args.n), "eps": (0.01, 0.3, args.n)}, t_end=args.t_end)
     print(f"grid {args.n} x {args.n} = {cfg.n_points} runs of {cfg.t_end:g} s, tol {cfg.tol:g}, "
-          f"SIMD batch size {hy.recommended_simd_size()}, {os.cpu_count()} cores, chunk {cfg.chunk_size}")
+          f"batch size {cfg.batch_size} (recommended_simd_size {hy.recommended_simd_size()}), {os.cpu_count()} cores, chunk {cfg.chunk_size}")
     rows = []
 
     t0 = time.perf_counter()
-    om.kernel(cfg.tol)
-    rows.append(("compile / load batch + scalar integrators", time.perf_counter() - t0))
+    om.kernel(cfg.tol, cfg.batch_size)
+    om.kernel(cfg.tol, hy.recommended_simd_size())
+    warm = om.MapConfig(ranges={"omega": (30.0, 40.0, 2), "eps": (0.1, 0.2, 2)}, t_end=0.1)
+    sweeps.run_sweep(warm, progress=False)  # first-call costs of xarray / netCDF / thread pool
+    om.run_chunk_scalar(warm, 0, 1)
+    rows.append(("compile / load integrators, warm-up", time.perf_counter() - t0))
 
     def timed(label, fn):
         t0 = time.perf_counter()
@@ -49,8 +53,15 @@ def main() -> None:
         print(f"  {label}: {rows[-1][1]:.2f} s", flush=True)
         return out
 
-    ref = timed("batch, 1 thread", lambda: sweeps.run_sweep(cfg, threads=1, progress=False))
-    thr = timed(f"batch, {args.workers} threads (default)", lambda: sweeps.run_sweep(cfg, threads=args.workers,
+    ref = timed(f"batch {cfg.batch_size} lanes, 1 thread", lambda: sweeps.run_sweep(cfg, threads=1, progress=False))
+    import dataclasses
+
+    rec = dataclasses.replace(cfg, batch_size=hy.recommended_simd_size())
+    r8 = timed(f"batch {rec.batch_size} lanes (recommended_simd_size), 1 thread",
+               lambda: sweeps.run_sweep(rec, threads=1, progress=False))
+    print(f"  outcome differs at {int((r8['outcome'] != ref['outcome']).sum())} of {cfg.n_points} points "
+          "(lane count changes rounding only)")
+    thr = timed(f"batch {cfg.batch_size} lanes, {args.workers} threads (default)", lambda: sweeps.run_sweep(cfg, threads=args.workers,
                                                                                       progress=False))
     assert np.array_equal(ref["outcome"], thr["outcome"])
     if not args.skip_scalar:
@@ -80,7 +91,8 @@ def main() -> None:
     for label, seconds in rows:
         print(f"{label:60s} {seconds:8.2f} s")
     d = dict(rows)
-    best = min(d[f"batch, {args.workers} threads (default)"], d["batch, 1 thread"])
+    best = min(d[f"batch {cfg.batch_size} lanes, {args.workers} threads (default)"],
+               d[f"batch {cfg.batch_size} lanes, 1 thread"])
     if "scalar, one run at a time" in d:
         print(f"speed-up batch (best local) over scalar loop: {d['scalar, one run at a time'] / best:.1f}x")
         print(f"speed-up dask processes (warm) over scalar loop: "

@@ -178,6 +178,7 @@ def _add_outcome_map(sub) -> None:
     p.add_argument("--tol", type=_finite_float, default=1e-10, help="integrator tolerance (default 1e-10)")
     p.add_argument("--fall-angle", type=_finite_float, default=0.1, help="tilt that ends a run [rad] (0.1)")
     p.add_argument("--chunk-size", type=_positive_int, default=128, help="grid points per chunk (default 128)")
+    p.add_argument("--batch-size", type=_positive_int, default=4, help="SIMD lanes per batch: 1, 2, 4, 8, 16 (4)")
     p.add_argument("--threads", type=_positive_int, help="threads without --scheduler (default: cores)")
     p.add_argument("--scheduler", help="dask.distributed scheduler address, or local:N for a local cluster")
     p.add_argument("--output", "-o", required=True, help="netCDF file (chunks go to OUTPUT.chunks/)")
@@ -189,7 +190,8 @@ def _outcome_map(args) -> int:
     ranges = {k: getattr(args, k) for k in ("omega", "eps", "mu", "e", "dgamma0") if getattr(args, k) is not None}
     output = _writable(args.output)
     ds = outcome_map(ranges, output=output, scheduler=args.scheduler, threads=args.threads, t_end=args.t_end,
-                     window=args.window, tol=args.tol, fall_angle=args.fall_angle, chunk_size=args.chunk_size)
+                     window=args.window, tol=args.tol, fall_angle=args.fall_angle, chunk_size=args.chunk_size,
+                     batch_size=args.batch_size)
     print(f"{output}: {ds.attrs['message']}")
     return 0
 
