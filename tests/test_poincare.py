@@ -106,3 +106,12 @@ def test_bifurcation_diagram(tmp_path):
     assert np.all(np.sin(ds["value"]) > 0.5)
     save(ds, tmp_path / "b.nc")
     xr.testing.assert_identical(load(tmp_path / "b.nc"), ds)
+
+
+def test_quaternion_model_finds_the_same_crossings():
+    """ODE Model 2 (quaternions, wrapped gamma: a mod-2pi section) against ODE Model 1 (unwrapped gamma)."""
+    quat = poincare.poincare_section("gamma mod 2pi=pi/2", model="ode-quaternion", t_end=2.0, tol=TOL)
+    euler = poincare.poincare_section("gamma=pi/2", model="ode-euler", t_end=2.0, tol=TOL)
+    assert quat.sizes["crossing"] == euler.sizes["crossing"] >= 1
+    np.testing.assert_allclose(quat["time"], euler["time"], rtol=1e-7)
+    np.testing.assert_allclose(quat["beta"], euler["beta"], atol=1e-7)
