@@ -307,7 +307,7 @@ def _finish(config: MapConfig, k: BatchKernel, raw: dict, pars: np.ndarray) -> d
         "z_S_final": o["z_S"],
     }
     failed = raw["failed"]
-    for name, values in res.items():  # a failed run keeps its last finite values; never a NaN
+    for name, values in res.items():  # never a NaN: non-finite values (failed runs) stored as 0, times as -1
         if values.dtype.kind == "f":
             res[name] = np.where(np.isfinite(values), values, FILL_TIME if "time" in name else 0.0)
     res["outcome"][failed | ~np.isfinite(outs).all(axis=0)] = OUTCOMES["failed"]

@@ -138,6 +138,8 @@ def _run(config, bounds, output, client, threads, progress, on_chunk) -> xr.Data
 
     try:
         if client is None:
+            if todo:
+                om.kernel(float(config.tol), int(config.batch_size))  # compile once, before the threads start
             with ThreadPoolExecutor(max_workers=threads or min(len(todo), os.cpu_count() or 1) or 1) as ex:
                 futures = {ex.submit(om.run_chunk, config, *bounds[i]): i for i in todo}
                 for fut in as_completed(futures):
