@@ -40,6 +40,21 @@ def test_linspace_semantics():
     assert cfg.shape == (8, 1) and cfg.window == pytest.approx(0.2 * cfg.t_end)
 
 
+def test_fast_point_preparation_matches_the_parameter_dataclasses():
+    """_prepare edits the base parameter vector; the validated dataclasses must give the same runs."""
+    from tippedisk_analysis.solvers import taylor
+
+    cfg = om.MapConfig(ranges={"omega": (-50, 80, 5), "eps": (0.01, 0.3, 3), "mu": (0.1, 0.5, 2),
+                               "e": (1e-3, 4e-3, 2), "dgamma0": (0.05, 0.2, 2)}, t_end=0.1)
+    x0, pars = om._prepare(cfg, 0, cfg.n_points)
+    for i in range(0, cfg.n_points, 7):
+        point = {k: v[0] for k, v in cfg.points(i, i + 1).items()}
+        setup, initial = om._point_setup(cfg.base_setup(), point)
+        np.testing.assert_array_equal(pars[:, i], taylor.parameter_values(setup, cfg.fall_angle, cfg.slip_smoothing))
+        np.testing.assert_array_equal(x0[:-2, i], taylor.initial_vector(om.ode.EULER, setup, initial))
+        assert initial.alpha_dot == point["omega"] and initial.gamma == pytest.approx(-np.pi / 2 + point["dgamma0"])
+
+
 def test_batch_equals_scalar():
     """SIMD batch lanes (with lanes that fall and are shadowed) = one run at a time."""
     cfg = om.MapConfig(ranges=SMALL, **OPTS)

@@ -257,18 +257,30 @@ RESULT_VARIABLES = {
 
 
 def _prepare(config: MapConfig, start: int, stop: int):
+    """Initial states (with the two quadratures) and runtime parameters of points [start, stop).
+
+    The swept physical parameters (mu, eps, e) only change entries of the base parameter vector
+    (their values were validated by MapConfig); the initial state depends on (Omega, dgamma0)
+    only and is computed once per distinct pair.
+    """
     from ..solvers import taylor
 
     base = config.base_setup()
     pts = config.points(start, stop)
     n = stop - start
     model = ode.EULER
+    pars = np.repeat(taylor.parameter_values(base, config.fall_angle, config.slip_smoothing)[:, None], n, axis=1)
+    for name in ("mu", "eps", "e"):
+        if name in pts:
+            pars[ode.PARAMETER_NAMES.index(name)] = pts[name]
     x0 = np.empty((len(model.state_names) + 2, n))
-    pars = np.empty((len(ode.PARAMETER_NAMES), n))
+    cache: dict[tuple, np.ndarray] = {}
     for i in range(n):
-        setup, init = _point_setup(base, {k: v[i] for k, v in pts.items()})
-        x0[:, i] = np.append(taylor.initial_vector(model, setup, init), [0.0, 0.0])
-        pars[:, i] = taylor.parameter_values(setup, config.fall_angle, config.slip_smoothing)
+        key = tuple(float(pts[k][i]) for k in ("omega", "dgamma0") if k in pts)
+        if key not in cache:
+            _, init = _point_setup(base, {k: pts[k][i] for k in ("omega", "dgamma0") if k in pts})
+            cache[key] = np.append(taylor.initial_vector(model, base, init), [0.0, 0.0])
+        x0[:, i] = cache[key]
     return x0, pars
 
 
