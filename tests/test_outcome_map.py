@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from tippedisk_analysis import ParameterError, load, save
+from tippedisk_analysis import ParameterError, load
 from tippedisk_analysis.analysis import outcome_map as om
 from tippedisk_analysis.analysis import sweeps
 from tippedisk_analysis.cli import main
@@ -213,7 +213,8 @@ def test_cli_scheduler_address(tmp_path):
 
 def test_cli_unreachable_scheduler_exits_2_without_file(tmp_path, capsys):
     out = tmp_path / "m.nc"
-    argv = ["outcome-map", "--omega", "30:50:2", "--eps", "0.1:0.2:2", "-o", str(out), "--scheduler", "tcp://127.0.0.1:9"]
+    argv = ["outcome-map", "--omega", "30:50:2", "--eps", "0.1:0.2:2", "-o", str(out),
+            "--scheduler", "tcp://127.0.0.1:9"]
     assert _exit_code(argv) == 2
     assert not out.exists() and not sweeps.chunk_dir(out).exists()
     assert "dask scheduler" in capsys.readouterr().err

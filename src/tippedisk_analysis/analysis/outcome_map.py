@@ -27,7 +27,8 @@ attributes; the outcome says which): ``inversion_time`` (first upward crossing o
 gamma = 0) and ``fall_time``.
 
 Execution: heyoka batch mode (``batch_size`` SIMD lanes, default 4: on the development
-machine ``hy.recommended_simd_size()`` = 8 was about 1.5x slower per run) over chunks of grid points, chunks on threads, or on a dask.distributed cluster (see :mod:`.sweeps`).
+machine ``hy.recommended_simd_size()`` = 8 was about 1.2-1.5x slower per run) over chunks of grid
+points; chunks run on threads, or on a dask.distributed cluster (see :mod:`.sweeps`).
 """
 
 from __future__ import annotations

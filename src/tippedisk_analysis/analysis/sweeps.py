@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from ..errors import DatasetError, ParameterError
+from ..errors import ParameterError
 from . import outcome_map as om
 
 CHUNK_PATTERN = "chunk_{:05d}.nc"
@@ -161,11 +161,3 @@ def _run(config, bounds, output, client, threads, progress, on_chunk) -> xr.Data
         save(ds, output)
         shutil.rmtree(d, ignore_errors=True)
     return ds
-
-
-def load_chunks_config(output) -> dict:
-    """The configuration stored with unfinished chunks of ``output``."""
-    p = chunk_dir(output) / "config.json"
-    if not p.is_file():
-        raise DatasetError(f"no unfinished outcome map at {output}")
-    return json.loads(p.read_text())
