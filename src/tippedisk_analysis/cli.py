@@ -168,7 +168,8 @@ def _poincare(args) -> int:
 
 def _add_outcome_map(sub) -> None:
     p = sub.add_parser("outcome-map", help="classify runs over a grid of (Omega, eps, ...) -> netCDF")
-    p.add_argument("--omega", type=_range, required=True, help="START:STOP:N initial spin Omega [rad/s]")
+    p.add_argument("--omega", type=_range, required=True, help="START:STOP:N initial spin Omega [rad/s] "
+                   "(N values, ends included; write --omega=-50:-10:5 for a negative START)")
     p.add_argument("--eps", type=_range, required=True, help="START:STOP:N smoothing velocity eps [m/s]")
     p.add_argument("--mu", type=_range, help="START:STOP:N friction coefficient (default 0.3)")
     p.add_argument("--e", type=_range, help="START:STOP:N eccentricity [m] (default 2.5e-3)")

@@ -1,1 +1,2 @@
-"""Analysis of whole trajectories: Poincaré sections, outcome maps, bifurcation diagrams."""
+"""Nonlinear-dynamics analysis: stationary spinning solutions (:mod:`.stationary`), their
+eigenvalue stability (:mod:`.stability`) and stability maps with critical spin speeds (:mod:`.maps`)."""
