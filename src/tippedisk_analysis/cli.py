@@ -97,6 +97,32 @@ def _writable(path: str) -> Path:
     return path
 
 
+COMMANDS = {"simulate": (_add_simulate, _simulate), "plot": (_add_plot, _plot)}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="tippedisk", description="Simulate and analyse the tippedisk (Sailer et al. 2020).")
+    from . import __version__
+
+    parser.add_argument("--version", action="version", version=f"tippedisk_analysis {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    for add, _ in COMMANDS.values():
+        add(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return COMMANDS[args.command][1](args)
+    except TippediskError as exc:
+        print(f"tippedisk {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+
+
+# --- trajectory analysis: Poincaré sections, outcome maps, bifurcation diagrams (issue 5) ---
+
+
 def _range(text: str):
     from .analysis.outcome_map import parse_range
 
@@ -227,29 +253,9 @@ def _bifurcation(args) -> int:
     return 0
 
 
-COMMANDS = {"simulate": (_add_simulate, _simulate), "plot": (_add_plot, _plot),
-            "poincare": (_add_poincare, _poincare), "outcome-map": (_add_outcome_map, _outcome_map),
-            "bifurcation": (_add_bifurcation, _bifurcation)}
-
-
-def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="tippedisk", description="Simulate and analyse the tippedisk (Sailer et al. 2020).")
-    from . import __version__
-
-    parser.add_argument("--version", action="version", version=f"tippedisk_analysis {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    for add, _ in COMMANDS.values():
-        add(sub)
-    return parser
-
-
-def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
-    try:
-        return COMMANDS[args.command][1](args)
-    except TippediskError as exc:
-        print(f"tippedisk {args.command}: error: {exc}", file=sys.stderr)
-        return 2
+# Trajectory analysis (issue 5): registered here, after the core commands.
+COMMANDS.update({"poincare": (_add_poincare, _poincare), "outcome-map": (_add_outcome_map, _outcome_map),
+                 "bifurcation": (_add_bifurcation, _bifurcation)})
 
 
 if __name__ == "__main__":

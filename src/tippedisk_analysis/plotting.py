@@ -57,6 +57,24 @@ def _disk(ds: xr.Dataset) -> dict | None:
         return None
 
 
+FIGURES = {"simulation": simulation_figure}
+
+
+def plot_dataset(ds: xr.Dataset, path: str | Path) -> Path:
+    """Draw ``ds`` with the figure function registered for its ``kind`` and save a PNG."""
+    kind = ds.attrs.get("kind")
+    if kind not in FIGURES:
+        raise DatasetError(f"no figure for datasets of kind {kind!r}; plottable kinds: {', '.join(FIGURES)}")
+    fig = FIGURES[kind](ds)
+    path = Path(path)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+# --- trajectory analysis (issue 5) ---
+
+
 def poincare_figure(ds: xr.Dataset):
     """Crossings of a Poincaré section: (gamma, gamma_dot) and (beta, gamma), coloured by time."""
     fig, axes = plt.subplots(1, 2, figsize=(10, 4.5), constrained_layout=True)
@@ -110,17 +128,4 @@ def bifurcation_figure(ds: xr.Dataset):
     return fig
 
 
-FIGURES = {"simulation": simulation_figure, "poincare": poincare_figure, "outcome_map": outcome_map_figure,
-           "bifurcation": bifurcation_figure}
-
-
-def plot_dataset(ds: xr.Dataset, path: str | Path) -> Path:
-    """Draw ``ds`` with the figure function registered for its ``kind`` and save a PNG."""
-    kind = ds.attrs.get("kind")
-    if kind not in FIGURES:
-        raise DatasetError(f"no figure for datasets of kind {kind!r}; plottable kinds: {', '.join(FIGURES)}")
-    fig = FIGURES[kind](ds)
-    path = Path(path)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+FIGURES.update({"poincare": poincare_figure, "outcome_map": outcome_map_figure, "bifurcation": bifurcation_figure})
