@@ -218,3 +218,21 @@ def test_cli_unreachable_scheduler_exits_2_without_file(tmp_path, capsys):
     assert _exit_code(argv) == 2
     assert not out.exists() and not sweeps.chunk_dir(out).exists()
     assert "dask scheduler" in capsys.readouterr().err
+
+
+def test_error_in_a_chunk_keeps_the_stored_chunks(tmp_path):
+    """An exception while storing (as Ctrl-C would raise) stops the sweep; finished chunks stay for a rerun."""
+    cfg = om.MapConfig(ranges=SMALL, **OPTS)
+    out = tmp_path / "m.nc"
+
+    def stop_after_two(i, seen=[]):  # noqa: B006 - deliberate accumulator
+        seen.append(i)
+        if len(seen) == 2:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        sweeps.run_sweep(cfg, output=out, threads=1, progress=False, on_chunk=stop_after_two)
+    assert len(list(sweeps.chunk_dir(out).glob("chunk_*.nc"))) == 2 and not out.exists()
+    computed = []
+    sweeps.run_sweep(cfg, output=out, progress=False, on_chunk=computed.append)
+    assert len(computed) == len(sweeps.chunk_bounds(cfg)) - 2 and out.exists()

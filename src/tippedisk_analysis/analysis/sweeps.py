@@ -142,15 +142,24 @@ def _run(config, bounds, output, client, threads, progress, on_chunk) -> xr.Data
                 om.kernel(float(config.tol), int(config.batch_size))  # compile once, before the threads start
             with ThreadPoolExecutor(max_workers=threads or min(len(todo), os.cpu_count() or 1) or 1) as ex:
                 futures = {ex.submit(om.run_chunk, config, *bounds[i]): i for i in todo}
-                for fut in as_completed(futures):
-                    store(futures[fut], fut.result())
+                try:
+                    for fut in as_completed(futures):
+                        store(futures[fut], fut.result())
+                except BaseException:  # Ctrl-C or an error: drop queued chunks, keep the stored ones
+                    for fut in futures:
+                        fut.cancel()
+                    raise
         else:
             from distributed import as_completed as dask_completed
 
             cfg = config.to_dict()  # plain data: workers rebuild the config and compile their own kernel
             futures = {client.submit(om.run_chunk, cfg, *bounds[i], pure=False): i for i in todo}
-            for fut in dask_completed(list(futures)):
-                store(futures[fut], fut.result())
+            try:
+                for fut in dask_completed(list(futures)):
+                    store(futures[fut], fut.result())
+            except BaseException:
+                client.cancel(list(futures))
+                raise
     finally:
         bar.close()
     merged = {k: np.concatenate([results[i][k] for i in range(len(bounds))]) for k in om.RESULT_VARIABLES}
