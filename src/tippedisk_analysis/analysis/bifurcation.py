@@ -11,6 +11,9 @@ run's ``status_code`` (flag values as in :data:`STATUS`).
 from __future__ import annotations
 
 import dataclasses
+import os
+import sys
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import xarray as xr
@@ -28,8 +31,8 @@ ANGLES = ("alpha", "gamma")  # stored wrapped into (-pi, pi] as ``value``
 def bifurcation_diagram(omega, *, quantity: str = "gamma", section: str = "beta_dot=0", direction: str = "positive",
                         setup: Setup | None = None, initial: InitialState | None = None, t_transient: float = 5.0,
                         t_end: float = 10.0, max_crossings: int = 50, tol: float = 1e-12,
-                        fall_angle: float = 0.1, progress: bool = True) -> xr.Dataset:
-    """``omega``: (start, stop, n) or an array of spin rates [rad/s]."""
+                        fall_angle: float = 0.1, progress: bool = True, threads: int | None = None) -> xr.Dataset:
+    """``omega``: (start, stop, n) or an array of spin rates [rad/s]; runs on ``threads`` threads (default: cores)."""
     from tqdm import tqdm
 
     omegas = np.linspace(*omega) if isinstance(omega, tuple) else np.asarray(omega, dtype=float)
@@ -42,11 +45,19 @@ def bifurcation_diagram(omega, *, quantity: str = "gamma", section: str = "beta_
     sec = poincare.parse_section(section, direction, model.name)
     setup, initial = setup or Setup(), initial or InitialState()
     rows, n_cross, status = [], [], []
-    for om in tqdm(omegas, desc="bifurcation", unit="Omega", delay=2.0, disable=not progress):
-        ds = poincare.poincare_section(sec, model=model.name, setup=setup,
-                                       initial=dataclasses.replace(initial, alpha_dot=float(om)),
-                                       t_transient=t_transient, t_end=t_end, max_crossings=max_crossings, tol=tol,
-                                       fall_angle=fall_angle)
+
+    def one(om):
+        return poincare.poincare_section(sec, model=model.name, setup=setup,
+                                         initial=dataclasses.replace(initial, alpha_dot=float(om)),
+                                         t_transient=t_transient, t_end=t_end, max_crossings=max_crossings, tol=tol,
+                                         fall_angle=fall_angle)
+
+    poincare._check(t_transient, t_end, max_crossings, tol, fall_angle)
+    poincare.section_integrator(model.name, sec.quantity, sec.modulo, sec.direction, float(tol))  # compile once
+    with ThreadPoolExecutor(max_workers=threads or os.cpu_count() or 1) as ex:  # heyoka releases the GIL
+        runs = list(tqdm(ex.map(one, omegas), total=len(omegas), desc="bifurcation", unit="Omega", delay=2.0,
+                         disable=not progress, file=sys.stderr))
+    for om, ds in zip(omegas, runs):
         n_cross.append(ds.sizes["crossing"])
         status.append(STATUS[ds.attrs["status"]])
         value = ds[quantity].values
