@@ -1,4 +1,6 @@
-"""Command line: ``tippedisk simulate | plot``. Thin: parse, call the library, print one line.
+"""Command line: ``tippedisk simulate | plot | poincare | outcome-map | bifurcation``.
+
+Thin: parse, call the library, print one line.
 
 Bad input (a TippediskError) prints one line on stderr and exits with status 2;
 nothing is written then. A run that ended with a numerical failure exits with 1.
@@ -168,6 +170,144 @@ def main(argv: list[str] | None = None) -> int:
     except TippediskError as exc:
         print(f"tippedisk {args.command}: error: {exc}", file=sys.stderr)
         return 2
+
+
+# --- trajectory analysis: Poincaré sections, outcome maps, bifurcation diagrams (issue 5) ---
+
+
+def _range(text: str):
+    from .analysis.outcome_map import parse_range
+
+    try:
+        return parse_range(text)
+    except ParameterError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} must be a positive integer")
+    return value
+
+
+def _add_initial_and_friction(p) -> None:
+    p.add_argument("--omega", type=_finite_float, help="initial spin Omega = alpha_dot(0) [rad/s] (Table 3: 40)")
+    p.add_argument("--dgamma0", type=_finite_float, help="gamma(0) = -pi/2 + dgamma0 [rad] (Table 3: 0.1)")
+    p.add_argument("--mu", type=_finite_float, help="friction coefficient (0.3)")
+    p.add_argument("--eps", type=_finite_float, help="smoothing of (2.29) [m/s] (0.1)")
+    p.add_argument("--model", default="ode-euler", help="ode-euler (ode1) or ode-quaternion (ode2)")
+    p.add_argument("--tol", type=_finite_float, default=1e-15, help="integrator tolerance (default 1e-15)")
+    p.add_argument("--t-end", type=_finite_float, default=10.0, help="end time [s] (default 10)")
+    p.add_argument("--t-transient", type=_finite_float, default=0.0, help="skip crossings before this time [s]")
+    p.add_argument("--max-crossings", type=_positive_int, help="stop after this many crossings")
+    p.add_argument("--section", default="beta_dot=0",
+                   help="NAME=LEVEL, e.g. beta_dot=0 (default), gamma=pi/2, 'alpha mod 2pi=0'")
+    p.add_argument("--direction", default="positive", choices=("positive", "negative", "any"),
+                   help="crossing direction of NAME (default positive)")
+    p.add_argument("--output", "-o", required=True, help="netCDF file to write")
+
+
+def _setup_initial(args):
+    import dataclasses
+
+    from .parameters import Friction, InitialState, Setup
+
+    fric = {k: v for k, v in (("mu", args.mu), ("eps", args.eps)) if v is not None}
+    init = {}
+    if getattr(args, "omega", None) is not None:
+        init["alpha_dot"] = args.omega
+    if args.dgamma0 is not None:
+        init["gamma"] = -0.5 * math.pi + args.dgamma0
+    return Setup(friction=dataclasses.replace(Friction(), **fric)), InitialState(**init)
+
+
+def _add_poincare(sub) -> None:
+    p = sub.add_parser("poincare", help="Poincaré section of one trajectory (heyoka events) -> netCDF")
+    _add_initial_and_friction(p)
+
+
+def _poincare(args) -> int:
+    from . import results
+    from .analysis.poincare import poincare_section
+
+    setup, initial = _setup_initial(args)
+    output = _writable(args.output)
+    ds = poincare_section(args.section, direction=args.direction, model=args.model, setup=setup, initial=initial,
+                          t_transient=args.t_transient, t_end=args.t_end, max_crossings=args.max_crossings,
+                          tol=args.tol)
+    results.save(ds, output)
+    print(f"{output}: section {ds.attrs['section']} ({ds.attrs['direction']}): {ds.attrs['message']}")
+    return 1 if ds.attrs["status"] == "nonfinite" else 0
+
+
+def _add_outcome_map(sub) -> None:
+    p = sub.add_parser("outcome-map", help="classify runs over a grid of (Omega, eps, ...) -> netCDF")
+    p.add_argument("--omega", type=_range, required=True, help="START:STOP:N initial spin Omega [rad/s] "
+                   "(N values, ends included; write --omega=-50:-10:5 for a negative START)")
+    p.add_argument("--eps", type=_range, required=True, help="START:STOP:N smoothing velocity eps [m/s]")
+    p.add_argument("--mu", type=_range, help="START:STOP:N friction coefficient (default 0.3)")
+    p.add_argument("--e", type=_range, help="START:STOP:N eccentricity [m] (default 2.5e-3)")
+    p.add_argument("--dgamma0", type=_range, help="START:STOP:N gamma(0) + pi/2 [rad] (default 0.1)")
+    p.add_argument("--t-end", type=_finite_float, default=5.0, help="length of each run [s] (default 5)")
+    p.add_argument("--window", type=_finite_float, help="classification window at the end [s] (default t_end/5)")
+    p.add_argument("--tol", type=_finite_float, default=1e-10, help="integrator tolerance (default 1e-10)")
+    p.add_argument("--fall-angle", type=_finite_float, default=0.1, help="tilt that ends a run [rad] (0.1)")
+    p.add_argument("--chunk-size", type=_positive_int, default=128, help="grid points per chunk (default 128)")
+    p.add_argument("--batch-size", type=_positive_int, default=4, help="SIMD lanes per batch: 1, 2, 4, 8, 16 (4)")
+    p.add_argument("--threads", type=_positive_int, help="threads without --scheduler (default: cores)")
+    p.add_argument("--scheduler", help="dask.distributed scheduler address, or local:N for a local cluster")
+    p.add_argument("--output", "-o", required=True, help="netCDF file (chunks go to OUTPUT.chunks/)")
+
+
+def _outcome_map(args) -> int:
+    from .analysis.outcome_map import outcome_map
+
+    ranges = {k: getattr(args, k) for k in ("omega", "eps", "mu", "e", "dgamma0") if getattr(args, k) is not None}
+    output = _writable(args.output)
+    ds = outcome_map(ranges, output=output, scheduler=args.scheduler, threads=args.threads, t_end=args.t_end,
+                     window=args.window, tol=args.tol, fall_angle=args.fall_angle, chunk_size=args.chunk_size,
+                     batch_size=args.batch_size)
+    print(f"{output}: {ds.attrs['message']}")
+    return 0
+
+
+def _add_bifurcation(sub) -> None:
+    p = sub.add_parser("bifurcation", help="brute-force bifurcation diagram: a quantity at crossings vs Omega")
+    p.add_argument("--omega", type=_range, required=True, help="START:STOP:N initial spin Omega [rad/s]")
+    p.add_argument("--quantity", default="gamma", help="quantity recorded at the crossings (default gamma)")
+    p.add_argument("--dgamma0", type=_finite_float, help="gamma(0) = -pi/2 + dgamma0 [rad] (Table 3: 0.1)")
+    p.add_argument("--mu", type=_finite_float, help="friction coefficient (0.3)")
+    p.add_argument("--eps", type=_finite_float, help="smoothing of (2.29) [m/s] (0.1)")
+    p.add_argument("--tol", type=_finite_float, default=1e-12, help="integrator tolerance (default 1e-12)")
+    p.add_argument("--t-end", type=_finite_float, default=10.0, help="end time of each run [s] (default 10)")
+    p.add_argument("--t-transient", type=_finite_float, default=5.0, help="transient skipped [s] (default 5)")
+    p.add_argument("--max-crossings", type=_positive_int, default=50, help="crossings per Omega (default 50)")
+    p.add_argument("--section", default="beta_dot=0", help="NAME=LEVEL (default beta_dot=0)")
+    p.add_argument("--direction", default="positive", choices=("positive", "negative", "any"))
+    p.add_argument("--output", "-o", required=True, help="netCDF file to write")
+
+
+def _bifurcation(args) -> int:
+    from . import results
+    from .analysis.bifurcation import bifurcation_diagram
+
+    setup, initial = _setup_initial(args)
+    output = _writable(args.output)
+    ds = bifurcation_diagram(args.omega, quantity=args.quantity, section=args.section, direction=args.direction,
+                             setup=setup, initial=initial, t_transient=args.t_transient, t_end=args.t_end,
+                             max_crossings=args.max_crossings, tol=args.tol)
+    results.save(ds, output)
+    print(f"{output}: {ds.attrs['message']}")
+    return 0
+
+
+# Trajectory analysis (issue 5): registered here, after the core commands.
+COMMANDS.update({"poincare": (_add_poincare, _poincare), "outcome-map": (_add_outcome_map, _outcome_map),
+                 "bifurcation": (_add_bifurcation, _bifurcation)})
 
 
 if __name__ == "__main__":

@@ -1,0 +1,508 @@
+"""Outcome maps: what the tippedisk does over a grid of (Omega, eps, mu, e, dgamma0).
+
+Every grid point is one run of ODE Model 1 (Euler angles, bilateral contact at C1, smooth
+Coulomb friction (2.29), Sect. 4.1) from the perturbed noninverted state of Table 3 with
+alpha_dot(0) = Omega and gamma(0) = -pi/2 + dgamma0, until ``t_end``.
+
+Classification (``outcome``, int8, see :data:`OUTCOMES`), checked in this order:
+
+* ``failed``: the integrator produced a non-finite state;
+* ``fell``: the tilt asin(sin beta) reached ``fall_angle`` before ``t_end`` (the Euler
+  angles are singular at sin beta = 0, the run ends there);
+* ``rolling``: the run reached ``t_end`` and gamma turned by at least 2 pi within the
+  classification window (the disk rolls over its rim instead of settling: slow spins);
+* ``inverted``: the run reached ``t_end`` and the mean of sin(gamma) over the
+  classification window [t_end - window, t_end] is >= ``threshold`` (0.9): the centre of
+  gravity S stayed above G (z_S - z_G = e sin(beta) sin(gamma), gamma near +pi/2);
+* ``not_inverted``: the same mean is <= -threshold: S stayed below G (gamma near -pi/2);
+* ``undecided``: anything else (still turning over, or large oscillations).
+
+Window means are exact time averages: the ODE is augmented with the quadratures
+Q1' = sin(gamma), Q2' = z_S, read at the window start and at the end of the run. For
+runs that ended early (fell, failed) the means are over [t_end - window, t_final], or over
+the whole run [0, t_final] if it ended before the window began.
+
+Times that do not exist are stored as the fill value -1 s (documented in the variable's
+attributes; the outcome says which): ``inversion_time`` (first upward crossing of
+gamma = 0) and ``fall_time``.
+
+Execution: heyoka batch mode (``batch_size`` SIMD lanes, default 4: on the development
+machine ``hy.recommended_simd_size()`` = 8 was about 1.2-1.5x slower per run) over chunks of grid
+points; chunks run on threads, or on a dask.distributed cluster (see :mod:`.sweeps`).
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import functools
+import math
+
+import numpy as np
+import xarray as xr
+
+from ..errors import ParameterError
+from ..models import ode
+from ..parameters import Disk, Friction, InitialState, Setup, to_dict
+from ..results import describe, make_attrs
+
+MODEL = "ode-euler"
+OUTCOMES = {"not_inverted": 0, "inverted": 1, "fell": 2, "undecided": 3, "failed": 4, "rolling": 5}
+FILL_TIME = -1.0
+
+# swept name: (units, long_name, default from Tables 1-3)
+SWEEPABLE = {
+    "omega": ("rad s-1", "initial spin rate Omega = alpha_dot(0)", InitialState().alpha_dot),
+    "eps": ("m s-1", "smoothing velocity eps of the friction law (2.29)", Friction().eps),
+    "mu": ("1", "friction coefficient mu", Friction().mu),
+    "e": ("m", "eccentricity e (distance G-S)", Disk().e),
+    "dgamma0": ("rad", "initial perturbation dgamma0, gamma(0) = -pi/2 + dgamma0",
+                InitialState().gamma + 0.5 * math.pi),
+}
+
+
+def parse_range(text: str) -> tuple[float, float, int]:
+    """``START:STOP:N`` -> (start, stop, n); N evenly spaced values including both ends."""
+    parts = str(text).split(":")
+    if len(parts) != 3:
+        raise ParameterError(f"range {text!r} is not START:STOP:N; give e.g. 10:80:64")
+    try:
+        start, stop = float(parts[0]), float(parts[1])
+        n = int(parts[2])
+    except ValueError:
+        raise ParameterError(f"range {text!r} is not START:STOP:N with numbers and an integer N; "
+                             "give e.g. 10:80:64") from None
+    if not (math.isfinite(start) and math.isfinite(stop)):
+        raise ParameterError(f"range {text!r} has a non-finite end; give finite START and STOP")
+    if n < 1:
+        raise ParameterError(f"range {text!r} has N = {n}; give N >= 1")
+    if n == 1 and start != stop:
+        raise ParameterError(f"range {text!r} has N = 1 but START != STOP; give START:START:1 for one value")
+    if n > 1 and start == stop:
+        raise ParameterError(f"range {text!r} repeats one value {n} times; give START < STOP or N = 1")
+    return start, stop, n
+
+
+@dataclasses.dataclass(frozen=True)
+class MapConfig:
+    """Everything that determines an outcome map (stored in it, and checked on resume)."""
+
+    ranges: dict  # swept name -> [start, stop, n], in the order of SWEEPABLE
+    t_end: float = 5.0
+    window: float | None = None  # default 0.2 t_end
+    threshold: float = 0.9
+    tol: float = 1e-10
+    fall_angle: float = 0.1
+    slip_smoothing: float = 1e-12
+    chunk_size: int = 128
+    batch_size: int = 4  # SIMD lanes; 4 measured ~1.5x faster per run than recommended_simd_size() = 8
+    setup: dict = dataclasses.field(default_factory=lambda: to_dict(Setup()))
+
+    def __post_init__(self):
+        if not self.ranges or "omega" not in self.ranges or "eps" not in self.ranges:
+            raise ParameterError("an outcome map needs ranges for omega and eps; give --omega and --eps")
+        unknown = set(self.ranges) - set(SWEEPABLE)
+        if unknown:
+            raise ParameterError(f"cannot sweep {sorted(unknown)}; sweepable: {', '.join(SWEEPABLE)}")
+        ordered = {k: [float(v[0]), float(v[1]), int(v[2])] for k, v in
+                   sorted(self.ranges.items(), key=lambda kv: list(SWEEPABLE).index(kv[0]))}
+        for k, v in ordered.items():
+            parse_range(f"{v[0]!r}:{v[1]!r}:{v[2]}")
+        object.__setattr__(self, "ranges", ordered)
+        if not (math.isfinite(self.t_end) and self.t_end > 0):
+            raise ParameterError(f"t_end = {self.t_end!r} s must be positive; give t_end > 0")
+        window = 0.2 * self.t_end if self.window is None else float(self.window)
+        if not (0 < window <= self.t_end):
+            raise ParameterError(f"window = {window!r} s must lie in (0, t_end]; give e.g. 0.2 t_end")
+        object.__setattr__(self, "window", window)
+        if not (0 < self.threshold < 1):
+            raise ParameterError(f"threshold = {self.threshold!r} must lie in (0, 1); give e.g. 0.9")
+        if not (math.isfinite(self.tol) and 0 < self.tol < 1):
+            raise ParameterError(f"tol = {self.tol!r} must lie in (0, 1); give e.g. 1e-10")
+        if not (0 < self.fall_angle < math.pi / 2):
+            raise ParameterError("fall_angle must lie in (0, pi/2) rad; give e.g. 0.1")
+        if int(self.chunk_size) != self.chunk_size or self.chunk_size < 1:
+            raise ParameterError(f"chunk_size = {self.chunk_size!r} must be a positive integer")
+        if self.batch_size not in (1, 2, 4, 8, 16):
+            raise ParameterError(f"batch_size = {self.batch_size!r}; give 1, 2, 4, 8 or 16 SIMD lanes")
+        # validate every swept value through the parameter dataclasses (ParameterError naming the fix)
+        for name, values in self.axes().items():
+            for v in (values[0], values[-1]) if name != "e" else values:
+                _point_setup(self.base_setup(), {name: v})
+
+    def axes(self) -> dict[str, np.ndarray]:
+        return {k: np.linspace(v[0], v[1], v[2]) for k, v in self.ranges.items()}
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(v[2] for v in self.ranges.values())
+
+    @property
+    def n_points(self) -> int:
+        return int(np.prod(self.shape))
+
+    def base_setup(self) -> Setup:
+        s = self.setup
+        return Setup(Disk(**s["disk"]), Friction(**s["friction"]), s["gravity"])
+
+    def points(self, start: int = 0, stop: int | None = None) -> dict[str, np.ndarray]:
+        """Swept values of the flattened grid points [start, stop) (C order)."""
+        axes = self.axes()
+        idx = np.unravel_index(np.arange(start, self.n_points if stop is None else stop), self.shape)
+        return {name: axes[name][i] for name, i in zip(axes, idx)}
+
+    def to_dict(self) -> dict:
+        return {"model": MODEL, **dataclasses.asdict(self)}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> MapConfig:
+        d = {k: v for k, v in d.items() if k != "model"}
+        return cls(**d)
+
+
+def _point_setup(base: Setup, values: dict) -> tuple[Setup, InitialState]:
+    """Setup and initial state of one grid point (Table 3 with the swept values)."""
+    fric = {k: values[k] for k in ("mu", "eps") if k in values}
+    disk = {k: values[k] for k in ("e",) if k in values}
+    setup = dataclasses.replace(base, friction=dataclasses.replace(base.friction, **fric),
+                                disk=dataclasses.replace(base.disk, **disk))
+    init = {}
+    if "omega" in values:
+        init["alpha_dot"] = values["omega"]
+    if "dgamma0" in values:
+        init["gamma"] = -0.5 * math.pi + values["dgamma0"]
+    return setup, InitialState(**init)
+
+
+class _InversionRecorder:
+    """Batch nt_event callback: first upward crossing of gamma = 0 per lane."""
+
+    def __init__(self):
+        self.first = None  # per-lane first crossing time (FILL_TIME if none yet)
+        self.done = None  # lanes whose run ended: events there are ignored
+
+    def __call__(self, ta, time, d_sign, batch_idx):
+        if self.first is not None and not self.done[batch_idx] and self.first[batch_idx] == FILL_TIME:
+            self.first[batch_idx] = time
+
+
+def _augmented_system():
+    """ODE Model 1 plus the quadratures Q1' = sin(gamma), Q2' = z_S (window means)."""
+    import heyoka as hy
+
+    model = ode.EULER
+    variables, sys, fall, outputs = ode.system(model)
+    q1, q2 = hy.make_vars("Q_sin_gamma", "Q_z_S")
+    gamma = variables[model.state_names.index("gamma")]
+    z_S = outputs[ode.OUTPUT_NAMES.index("z_S")]
+    sys = [*sys, (q1, hy.sin(gamma)), (q2, z_S)]
+    return model, variables, sys, fall, outputs, gamma
+
+
+@dataclasses.dataclass(frozen=True)
+class BatchKernel:
+    integrator: object  # taylor_adaptive_batch template
+    scalar: object  # taylor_adaptive template with the same system and events
+    outputs: object  # cfunc of ode.OUTPUT_NAMES over the model state
+    batch_size: int
+
+
+@functools.lru_cache(maxsize=4)
+def kernel(tol: float, batch_size: int = 4) -> BatchKernel:
+    """Compiled batch and scalar integrators (cached per process; heyoka also caches on disk)."""
+    import heyoka as hy
+
+    from ..solvers import taylor
+
+    model, variables, sys, fall, outputs, gamma = _augmented_system()
+    B = int(batch_size)
+    setup, init = Setup(), InitialState()
+    x0 = np.append(taylor.initial_vector(model, setup, init), [0.0, 0.0])
+    pars = taylor.parameter_values(setup, 0.1, 1e-12)
+    pos, neg = hy.event_direction.positive, hy.event_direction.negative
+    batch = hy.taylor_adaptive_batch(
+        sys, np.repeat(x0[:, None], B, axis=1), pars=np.repeat(pars[:, None], B, axis=1), tol=tol,
+        t_events=[hy.t_event_batch(fall, direction=neg)],
+        nt_events=[hy.nt_event_batch(gamma, _InversionRecorder(), direction=pos)])
+    scalar = hy.taylor_adaptive(
+        sys, x0, pars=pars, tol=tol, t_events=[hy.t_event(fall, direction=neg)],
+        nt_events=[hy.nt_event(gamma, _ScalarInversion(), direction=pos)])
+    return BatchKernel(batch, scalar, hy.cfunc(outputs, variables), B)
+
+
+class _ScalarInversion:
+    def __init__(self):
+        self.first = FILL_TIME
+
+    def __call__(self, ta, time, d_sign):
+        if self.first == FILL_TIME:
+            self.first = time
+
+
+RESULT_VARIABLES = {
+    # name: (dtype, units, long_name)
+    "outcome": (np.int8, "1", "classified outcome of the run"),
+    "inversion_time": (float, "s", "first upward crossing of gamma = 0 (fill -1: none)"),
+    "fall_time": (float, "s", "time the tilt reached fall_angle (fill -1: did not fall)"),
+    "t_final": (float, "s", "time the run ended"),
+    "gamma_turns": (float, "1", "(gamma(t_final) - gamma(window start)) / (2 pi)"),
+    "sin_gamma_mean": (float, "1", "time mean of sin(gamma) over the classification window"),
+    "z_S_mean": (float, "m", "time mean of z_S over the classification window"),
+    "E_tot_final": (float, "J", "total energy at t_final"),
+    "E_kin_final": (float, "J", "kinetic energy at t_final"),
+    "beta_final": (float, "rad", "Euler angle beta at t_final"),
+    "gamma_final": (float, "rad", "Euler angle gamma at t_final (unwrapped)"),
+    "alpha_dot_final": (float, "rad s-1", "alpha_dot at t_final"),
+    "z_S_final": (float, "m", "height of S at t_final"),
+}
+
+
+def _prepare(config: MapConfig, start: int, stop: int):
+    """Initial states (with the two quadratures) and runtime parameters of points [start, stop).
+
+    The swept physical parameters (mu, eps, e) only change entries of the base parameter vector
+    (their values were validated by MapConfig); the initial state depends on (Omega, dgamma0)
+    only and is computed once per distinct pair.
+    """
+    from ..solvers import taylor
+
+    base = config.base_setup()
+    pts = config.points(start, stop)
+    n = stop - start
+    model = ode.EULER
+    pars = np.repeat(taylor.parameter_values(base, config.fall_angle, config.slip_smoothing)[:, None], n, axis=1)
+    for name in ("mu", "eps", "e"):
+        if name in pts:
+            pars[ode.PARAMETER_NAMES.index(name)] = pts[name]
+    x0 = np.empty((len(model.state_names) + 2, n))
+    cache: dict[tuple, np.ndarray] = {}
+    for i in range(n):
+        key = tuple(float(pts[k][i]) for k in ("omega", "dgamma0") if k in pts)
+        if key not in cache:
+            _, init = _point_setup(base, {k: pts[k][i] for k in ("omega", "dgamma0") if k in pts})
+            cache[key] = np.append(taylor.initial_vector(model, base, init), [0.0, 0.0])
+        x0[:, i] = cache[key]
+    return x0, pars
+
+
+def _finish(config: MapConfig, k: BatchKernel, raw: dict, pars: np.ndarray) -> dict:
+    """Classification and final outputs from the raw per-point results."""
+    n_state = len(ode.EULER.state_names)
+    final = raw["final_state"]
+    outs = k.outputs(np.ascontiguousarray(final[:n_state]), pars=np.ascontiguousarray(pars[: k.outputs.nparams]))
+    o = dict(zip(ode.OUTPUT_NAMES, outs))
+    t_final, t_w = raw["t_final"], raw["t_window"]
+    span = t_final - t_w
+    sin_mean = (final[n_state] - raw["q_window"][0]) / np.where(span > 0, span, 1.0)
+    zs_mean = (final[n_state + 1] - raw["q_window"][1]) / np.where(span > 0, span, 1.0)
+    sin_mean = np.where(span > 0, sin_mean, np.sin(final[ode.EULER.state_names.index("gamma")]))
+    zs_mean = np.where(span > 0, zs_mean, o["z_S"])
+    outcome = np.full(t_final.shape, OUTCOMES["undecided"], dtype=np.int8)
+    outcome[sin_mean >= config.threshold] = OUTCOMES["inverted"]
+    outcome[sin_mean <= -config.threshold] = OUTCOMES["not_inverted"]
+    turns = (final[ode.EULER.state_names.index("gamma")] - raw["gamma_window"]) / (2 * math.pi)
+    outcome[np.abs(turns) >= 1.0] = OUTCOMES["rolling"]
+    outcome[raw["fell"]] = OUTCOMES["fell"]
+    outcome[raw["failed"]] = OUTCOMES["failed"]
+    res = {
+        "outcome": outcome,
+        "inversion_time": raw["inversion_time"],
+        "fall_time": np.where(raw["fell"], t_final, FILL_TIME),
+        "t_final": t_final,
+        "gamma_turns": turns,
+        "sin_gamma_mean": sin_mean,
+        "z_S_mean": zs_mean,
+        "E_tot_final": o["E_kin"] + o["E_pot"],
+        "E_kin_final": o["E_kin"],
+        "beta_final": o["beta"],
+        "gamma_final": o["gamma"],
+        "alpha_dot_final": o["alpha_dot"],
+        "z_S_final": o["z_S"],
+    }
+    failed = raw["failed"]
+    for name, values in res.items():  # never a NaN: non-finite values (failed runs) stored as 0, times as -1
+        if values.dtype.kind == "f":
+            res[name] = np.where(np.isfinite(values), values, FILL_TIME if "time" in name else 0.0)
+    res["outcome"][failed | ~np.isfinite(outs).all(axis=0)] = OUTCOMES["failed"]
+    return res
+
+
+def run_chunk(config: MapConfig | dict, start: int, stop: int) -> dict:
+    """Outcome of grid points [start, stop): batch mode, SIMD lanes of the kernel's batch size.
+
+    Module-level and deterministic, so a dask worker can run it from the config alone.
+    """
+    if isinstance(config, dict):
+        config = MapConfig.from_dict(config)
+    k = kernel(float(config.tol), int(config.batch_size))
+    B = k.batch_size
+    x0, pars = _prepare(config, start, stop)
+    n = stop - start
+    raw = {"final_state": np.empty_like(x0), "t_final": np.empty(n), "t_window": np.empty(n),
+           "q_window": np.zeros((2, n)), "gamma_window": np.empty(n), "fell": np.zeros(n, bool),
+           "failed": np.zeros(n, bool), "inversion_time": np.full(n, FILL_TIME)}
+    ta_template = copy.copy(k.integrator)  # one integrator per chunk, reused batch after batch
+    for b0 in range(0, n, B):
+        lanes = np.arange(b0, min(b0 + B, n))
+        idx = np.concatenate([lanes, np.full(B - len(lanes), lanes[-1])])  # pad with the last point
+        res = _run_batch(ta_template, x0[:, idx], pars[:, idx], config)
+        m = len(lanes)
+        for key, val in res.items():
+            raw[key][..., lanes] = val[..., :m]
+    return _finish(config, k, raw, pars)
+
+
+def _run_batch(ta, x0: np.ndarray, pars: np.ndarray, config: MapConfig) -> dict:
+    import heyoka as hy
+
+    B = x0.shape[1]
+    ta.set_time(np.zeros(B))
+    ta.state[:] = x0
+    ta.pars[:] = pars
+    ta.reset_cooldowns()
+    rec = ta.nt_events[0].callback
+    done = np.zeros(B, bool)
+    rec.first, rec.done = np.full(B, FILL_TIME), done
+    fell, failed = np.zeros(B, bool), np.zeros(B, bool)
+    final = np.empty_like(x0)
+    t_final = np.empty(B)
+    t_w = config.t_end - config.window
+    q_window = np.zeros((2, B))
+    t_window = np.zeros(B)  # window start actually used (0 if the run ended before it)
+    n_state = x0.shape[0] - 2
+    i_gamma = ode.EULER.state_names.index("gamma")
+    gamma_window = x0[i_gamma].copy()
+
+    def advance(t_target):
+        while True:
+            ta.propagate_until(t_target)
+            for i, r in enumerate(ta.propagate_res):
+                if done[i]:
+                    continue
+                oc = r[0]
+                if oc == hy.taylor_outcome.time_limit:
+                    continue
+                if int(oc) == -1:  # terminal event 0: the disk fell
+                    fell[i] = True
+                elif oc == hy.taylor_outcome.err_nf_state:
+                    failed[i] = True
+                else:
+                    continue  # stopped because another lane triggered its terminal event
+                done[i] = True
+                final[:, i] = ta.state[:, i]
+                t_final[i] = ta.time[i]
+            active = np.flatnonzero(~done)
+            if len(active) == 0 or np.all(ta.time[active] >= t_target):
+                return
+            # lanes that ended shadow an active lane from here on (their events are ignored)
+            j = active[0]
+            times = np.array(ta.time)
+            st = np.array(ta.state)
+            for i in np.flatnonzero(done):
+                st[:, i] = st[:, j]
+                times[i] = times[j]
+            ta.state[:] = st
+            ta.set_time(times)
+            ta.reset_cooldowns()
+
+    if t_w > 0:
+        advance(t_w)
+        alive = ~done
+        q_window[:, alive] = ta.state[n_state:, alive]
+        gamma_window[alive] = ta.state[i_gamma, alive]
+        t_window[alive] = t_w
+    advance(config.t_end)
+    alive = ~done
+    final[:, alive] = ta.state[:, alive]
+    t_final[alive] = ta.time[alive]
+    return {"final_state": final, "t_final": t_final, "t_window": t_window, "q_window": q_window,
+            "gamma_window": gamma_window, "fell": fell, "failed": failed, "inversion_time": rec.first.copy()}
+
+
+def run_chunk_scalar(config: MapConfig | dict, start: int, stop: int) -> dict:
+    """The same as :func:`run_chunk`, one run at a time with the scalar integrator (reference)."""
+    import heyoka as hy
+
+    if isinstance(config, dict):
+        config = MapConfig.from_dict(config)
+    k = kernel(float(config.tol), int(config.batch_size))
+    x0, pars = _prepare(config, start, stop)
+    n = stop - start
+    n_state = x0.shape[0] - 2
+    i_gamma = ode.EULER.state_names.index("gamma")
+    raw = {"final_state": np.empty_like(x0), "t_final": np.empty(n), "t_window": np.zeros(n),
+           "q_window": np.zeros((2, n)), "gamma_window": x0[i_gamma].copy(), "fell": np.zeros(n, bool),
+           "failed": np.zeros(n, bool), "inversion_time": np.full(n, FILL_TIME)}
+    t_w = config.t_end - config.window
+    ta = copy.copy(k.scalar)
+    for i in range(n):
+        ta.time = 0.0
+        ta.state[:] = x0[:, i]
+        ta.pars[:] = pars[:, i]
+        ta.reset_cooldowns()
+        rec = ta.nt_events[0].callback
+        rec.first = FILL_TIME
+        for t_target in ((t_w,) if t_w > 0 else ()) + (config.t_end,):
+            oc = ta.propagate_until(t_target)[0]
+            if oc != hy.taylor_outcome.time_limit:
+                raw["fell" if int(oc) == -1 else "failed"][i] = True
+                break
+            if t_target == t_w:
+                raw["q_window"][:, i] = ta.state[n_state:]
+                raw["gamma_window"][i] = ta.state[i_gamma]
+                raw["t_window"][i] = t_w
+        raw["final_state"][:, i] = ta.state
+        raw["t_final"][i] = ta.time
+        raw["inversion_time"][i] = rec.first
+    return _finish(config, k, raw, pars)
+
+
+def assemble(config: MapConfig, results: dict) -> xr.Dataset:
+    """Dataset with dims = swept parameters from flat per-point results (C order)."""
+    axes = config.axes()
+    dims = tuple(axes)
+    shape = config.shape
+    data = {}
+    for name, (dtype, units, long_name) in RESULT_VARIABLES.items():
+        attrs = {"units": units, "long_name": long_name}
+        if name in ("inversion_time", "fall_time"):
+            attrs["fill_value_meaning"] = f"{FILL_TIME:g} s where the event did not happen"
+        data[name] = (dims, np.asarray(results[name], dtype=dtype).reshape(shape), attrs)
+    data["outcome"][2].update(
+        flag_values=np.array(list(OUTCOMES.values()), dtype=np.int8),
+        flag_meanings=" ".join(OUTCOMES),
+        classification=("failed: non-finite state; fell: tilt reached fall_angle before t_end; "
+                        f"inverted: mean sin(gamma) over [t_end - window, t_end] >= {config.threshold}; "
+                        f"not_inverted: that mean <= -{config.threshold}; rolling (checked before those two): "
+                        "gamma turned by >= 2 pi within the window; undecided: otherwise"),
+    )
+    coords = {}
+    for name, values in axes.items():
+        units, long_name, _ = SWEEPABLE[name]
+        coords[name] = (name, values, {"units": units, "long_name": long_name})
+    counts = {k: int(np.sum(np.asarray(results["outcome"]) == v)) for k, v in OUTCOMES.items()}
+    n_failed = counts["failed"]
+    status = "completed" if n_failed == 0 else "partial"
+    message = (f"{config.n_points} runs of {config.t_end:g} s: "
+               + ", ".join(f"{v} {k}" for k, v in counts.items()))
+    if n_failed:
+        message += "; failed runs hit a non-finite state: try a smaller --tol"
+    ds = xr.Dataset(data, coords=coords,
+                    attrs=make_attrs("outcome_map", config.to_dict(), status, message, model=MODEL,
+                                     paper_model=ode.EULER.paper_name, swept=" ".join(dims),
+                                     t_end=config.t_end, window=config.window))
+    return describe(ds)
+
+
+def outcome_map(ranges: dict, *, output=None, scheduler=None, threads: int | None = None, progress: bool = True,
+                **options) -> xr.Dataset:
+    """Outcome map over ``ranges`` ({name: (start, stop, n)} for names in :data:`SWEEPABLE`).
+
+    ``output``: netCDF path; chunks go to ``<output>.chunks/`` as they finish and a rerun
+    resumes. ``scheduler``: dask.distributed address (or ``"local:N"``); default: threads.
+    Further options: the fields of :class:`MapConfig` (t_end, window, tol, ...).
+    """
+    from . import sweeps
+
+    config = MapConfig(ranges=dict(ranges), **options)
+    return sweeps.run_sweep(config, output=output, scheduler=scheduler, threads=threads, progress=progress)
