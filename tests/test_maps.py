@@ -20,14 +20,6 @@ def small_map():
     return maps.stability_map(OMEGA, EPS)
 
 
-def test_parse_range():
-    np.testing.assert_allclose(maps.parse_range("0:10:6", "omega"), [0, 2, 4, 6, 8, 10])
-    np.testing.assert_allclose(maps.parse_range("0.3", "mu"), [0.3])
-    for bad in ("0:10", "a:b:3", "0:10:0", "0:10:1", "0:inf:3", "1:2:3:4", "0:10:2.5"):
-        with pytest.raises(ParameterError, match="START:STOP:N"):
-            maps.parse_range(bad, "omega")
-
-
 def test_map_layout(small_map):
     ds = small_map
     assert ds.attrs["kind"] == "stability_map"

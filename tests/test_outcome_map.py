@@ -22,18 +22,6 @@ SMALL = {"omega": (5.0, 70.0, 6), "eps": (0.05, 0.2, 4)}  # 24 points: 3 batches
 OPTS = {"t_end": 1.0, "chunk_size": 8}
 
 
-@pytest.mark.parametrize("text,expected", [("10:80:64", (10.0, 80.0, 64)), ("-50:-10:5", (-50.0, -10.0, 5)),
-                                           ("0.1:0.1:1", (0.1, 0.1, 1))])
-def test_parse_range(text, expected):
-    assert om.parse_range(text) == expected
-
-
-@pytest.mark.parametrize("text", ["10:80", "10:80:0", "a:b:3", "1:2:2.5", "1:nan:3", "1:2:1", "3:3:4", ""])
-def test_parse_range_rejects(text):
-    with pytest.raises(ParameterError):
-        om.parse_range(text)
-
-
 def test_linspace_semantics():
     cfg = om.MapConfig(ranges={"omega": (10, 80, 8), "eps": (0.1, 0.1, 1)})
     np.testing.assert_array_equal(cfg.axes()["omega"], np.linspace(10, 80, 8))

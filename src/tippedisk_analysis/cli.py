@@ -14,6 +14,7 @@ import sys
 from pathlib import Path
 
 from .errors import ParameterError, TippediskError
+from .ranges import parse_range, range_values
 
 
 class _Parser(argparse.ArgumentParser):
@@ -139,7 +140,7 @@ def _stability_map(args) -> int:
     from . import results
     from .analysis import maps
 
-    ranges = {name: maps.parse_range(getattr(args, name), name) if getattr(args, name) is not None else None
+    ranges = {name: range_values(getattr(args, name), name) if getattr(args, name) is not None else None
               for name in ("omega", "eps", "mu", "e")}
     output = _writable(args.output)
     ds = maps.stability_map(ranges["omega"], ranges["eps"], mu=ranges["mu"], e=ranges["e"])
@@ -176,8 +177,6 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _range(text: str):
-    from .analysis.outcome_map import parse_range
-
     try:
         return parse_range(text)
     except ParameterError as exc:

@@ -15,7 +15,6 @@ as critical without refinement.
 from __future__ import annotations
 
 import dataclasses
-import math
 
 import heyoka as hy
 import numpy as np
@@ -35,29 +34,6 @@ CRITICAL_PAD = -1.0e30  # padding of omega_critical beyond n_critical (not a _Fi
 SWEEPABLE = {"eps": ("m s-1", "smoothing velocity eps of the regularised Coulomb law (2.29)"),
              "mu": ("1", "friction coefficient mu (2.29)"),
              "e": ("m", "eccentricity e = |r_GS| of the centre of gravity")}
-
-
-def parse_range(text: str, name: str) -> np.ndarray:
-    """``START:STOP:N`` -> N evenly spaced values from START to STOP inclusive; a single number -> 1 value."""
-    parts = str(text).split(":")
-    try:
-        if len(parts) == 1:
-            values = np.array([float(parts[0])])
-        elif len(parts) == 3:
-            start, stop = float(parts[0]), float(parts[1])
-            n = int(parts[2])
-            if n < 1 or (n == 1 and start != stop) or not (math.isfinite(start) and math.isfinite(stop)):
-                raise ValueError
-            values = np.linspace(start, stop, n)
-        else:
-            raise ValueError
-    except ValueError:
-        raise ParameterError(f"--{name} {text!r} is not a range; give START:STOP:N (finite numbers, N >= 2 "
-                             f"values; N = 1 needs START = STOP), e.g. --{name} 0:100:101, or one number "
-                             f"(write --{name}=-1:1:3 for a negative START)") from None
-    if not np.all(np.isfinite(values)):
-        raise ParameterError(f"--{name} {text!r} holds a non-finite value; give finite numbers")
-    return values
 
 
 def _validated(setup: Setup, name: str, values: np.ndarray) -> None:

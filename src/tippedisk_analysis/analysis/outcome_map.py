@@ -44,6 +44,7 @@ import xarray as xr
 from ..errors import ParameterError
 from ..models import ode
 from ..parameters import Disk, Friction, InitialState, Setup, to_dict
+from ..ranges import parse_range
 from ..results import describe, make_attrs
 
 MODEL = "ode-euler"
@@ -59,28 +60,6 @@ SWEEPABLE = {
     "dgamma0": ("rad", "initial perturbation dgamma0, gamma(0) = -pi/2 + dgamma0",
                 InitialState().gamma + 0.5 * math.pi),
 }
-
-
-def parse_range(text: str) -> tuple[float, float, int]:
-    """``START:STOP:N`` -> (start, stop, n); N evenly spaced values including both ends."""
-    parts = str(text).split(":")
-    if len(parts) != 3:
-        raise ParameterError(f"range {text!r} is not START:STOP:N; give e.g. 10:80:64")
-    try:
-        start, stop = float(parts[0]), float(parts[1])
-        n = int(parts[2])
-    except ValueError:
-        raise ParameterError(f"range {text!r} is not START:STOP:N with numbers and an integer N; "
-                             "give e.g. 10:80:64") from None
-    if not (math.isfinite(start) and math.isfinite(stop)):
-        raise ParameterError(f"range {text!r} has a non-finite end; give finite START and STOP")
-    if n < 1:
-        raise ParameterError(f"range {text!r} has N = {n}; give N >= 1")
-    if n == 1 and start != stop:
-        raise ParameterError(f"range {text!r} has N = 1 but START != STOP; give START:START:1 for one value")
-    if n > 1 and start == stop:
-        raise ParameterError(f"range {text!r} repeats one value {n} times; give START < STOP or N = 1")
-    return start, stop, n
 
 
 @dataclasses.dataclass(frozen=True)
@@ -107,7 +86,7 @@ class MapConfig:
         ordered = {k: [float(v[0]), float(v[1]), int(v[2])] for k, v in
                    sorted(self.ranges.items(), key=lambda kv: list(SWEEPABLE).index(kv[0]))}
         for k, v in ordered.items():
-            parse_range(f"{v[0]!r}:{v[1]!r}:{v[2]}")
+            parse_range(f"{v[0]!r}:{v[1]!r}:{v[2]}", k)
         object.__setattr__(self, "ranges", ordered)
         if not (math.isfinite(self.t_end) and self.t_end > 0):
             raise ParameterError(f"t_end = {self.t_end!r} s must be positive; give t_end > 0")
