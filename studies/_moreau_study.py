@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import argparse
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -11,10 +10,9 @@ import numpy as np
 from tippedisk_analysis import results, simulate
 
 
-def output_dir(description: str) -> Path:
-    parser = argparse.ArgumentParser(description=description)
-    parser.add_argument("output", nargs="?", default="output", help="folder for the .nc and .png files (default output/)")
-    path = Path(parser.parse_args().output)
+def prepare(output_dir: str) -> Path:
+    """The output folder, created if missing."""
+    path = Path(output_dir)
     path.mkdir(parents=True, exist_ok=True)
     return path
 

@@ -2,18 +2,29 @@
 
 Paper: z_S oscillates aperiodically about 0.044 m on [1, 5] s (Model 1) instead of reaching r + e;
 the Euler gap g_N1 chatters between 0 and -2e-9 m; the quaternion gap drifts down monotonically.
+
+    python studies/fig07_08_setvalued_coulomb.py [OUTPUT_DIR]    (default: output/; or: tippedisk study fig07_08_setvalued_coulomb)
 """
 
-from _moreau_study import output_dir, run, save, window_mean
+import sys
+
+from _moreau_study import prepare, run, save, window_mean
 
 from tippedisk_analysis import plotting
 
-out = output_dir(__doc__)
-m1, m2 = run(out, "m1", 5.0), run(out, "m2", 5.0)
-m2n = run(out, "m2", 5.0, normalize_quaternion=True, tag="normalized")
-save(plotting.simulation_figure(m1), out / "fig07_model1.png")
-save(plotting.gap_figure({"Model 1 (E)": m1, "Model 2 (Q)": m2, "Model 2 (Q, normalised)": m2n}), out / "fig08_gap.png")
-print(f"Model 1: mean z_S on [1, 5] s = {window_mean(m1, 'z_S', 1, 5):.5f} m (paper ~0.044 m); "
-      f"g_N1 in [{float(m1.g_N1.min()):.3g}, {float(m1.g_N1.max()):.3g}] m (paper [-2e-9, 0])")
-print(f"Model 2: g_N1(5 s) = {float(m2.g_N1[-1]):.3g} m (drift), gamma(5 s) = {float(m2.gamma[-1]):.3f} rad")
-print(f"Model 2 with quaternion normalisation: g_N1 min = {float(m2n.g_N1.min()):.3g} m, g_N1(5 s) = {float(m2n.g_N1[-1]):.3g} m")
+
+def main(output_dir: str = "output"):
+    out = prepare(output_dir)
+    m1, m2 = run(out, "m1", 5.0), run(out, "m2", 5.0)
+    m2n = run(out, "m2", 5.0, normalize_quaternion=True, tag="normalized")
+    save(plotting.simulation_figure(m1), out / "fig07_model1.png")
+    save(plotting.gap_figure({"Model 1 (E)": m1, "Model 2 (Q)": m2, "Model 2 (Q, normalised)": m2n}), out / "fig08_gap.png")
+    print(f"Model 1: mean z_S on [1, 5] s = {window_mean(m1, 'z_S', 1, 5):.5f} m (paper ~0.044 m); "
+          f"g_N1 in [{float(m1.g_N1.min()):.3g}, {float(m1.g_N1.max()):.3g}] m (paper [-2e-9, 0])")
+    print(f"Model 2: g_N1(5 s) = {float(m2.g_N1[-1]):.3g} m (drift), gamma(5 s) = {float(m2.gamma[-1]):.3f} rad")
+    print(f"Model 2 with quaternion normalisation: g_N1 min = {float(m2n.g_N1.min()):.3g} m, g_N1(5 s) = {float(m2n.g_N1[-1]):.3g} m")
+    return out
+
+
+if __name__ == "__main__":
+    main(*sys.argv[1:2])

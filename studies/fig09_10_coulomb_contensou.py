@@ -2,21 +2,32 @@
 
 Paper: inversion on [0, 0.5] s (gamma rises to pi/2), damped oscillation, z_S -> r + e;
 quaternion gap drift saturating near -1.36e-5 m.
+
+    python studies/fig09_10_coulomb_contensou.py [OUTPUT_DIR]    (default: output/; or: tippedisk study fig09_10_coulomb_contensou)
 """
 
+import sys
+
 import numpy as np
-from _moreau_study import output_dir, run, save
+from _moreau_study import prepare, run, save
 
 from tippedisk_analysis import plotting
 
-out = output_dir(__doc__)
-m3, m4 = run(out, "m3", 5.0), run(out, "m4", 5.0)
-m4n = run(out, "m4", 5.0, normalize_quaternion=True, tag="normalized")
-save(plotting.simulation_figure(m3), out / "fig09_model3.png")
-save(plotting.gap_figure({"Model 3 (E)": m3, "Model 4 (Q)": m4, "Model 4 (Q, normalised)": m4n}), out / "fig10_gap.png")
-t_inv = float(m3.time[np.argmax(m3.gamma.values > np.pi / 2 - 0.2)])
-print(f"Model 3: gamma first within 0.2 rad of pi/2 at t = {t_inv:.3f} s (paper: within 0.5 s); "
-      f"z_S(5 s) = {float(m3.z_S[-1]):.5f} m (r + e = 0.0475 m)")
-print(f"Model 4: g_N1 min = {float(m4.g_N1.min()):.3g} m, g_N1(5 s) = {float(m4.g_N1[-1]):.3g} m "
-      "(paper: saturates near -1.36e-5 m)")
-print(f"Model 4 with quaternion normalisation: g_N1 min = {float(m4n.g_N1.min()):.3g} m, g_N1(5 s) = {float(m4n.g_N1[-1]):.3g} m")
+
+def main(output_dir: str = "output"):
+    out = prepare(output_dir)
+    m3, m4 = run(out, "m3", 5.0), run(out, "m4", 5.0)
+    m4n = run(out, "m4", 5.0, normalize_quaternion=True, tag="normalized")
+    save(plotting.simulation_figure(m3), out / "fig09_model3.png")
+    save(plotting.gap_figure({"Model 3 (E)": m3, "Model 4 (Q)": m4, "Model 4 (Q, normalised)": m4n}), out / "fig10_gap.png")
+    t_inv = float(m3.time[np.argmax(m3.gamma.values > np.pi / 2 - 0.2)])
+    print(f"Model 3: gamma first within 0.2 rad of pi/2 at t = {t_inv:.3f} s (paper: within 0.5 s); "
+          f"z_S(5 s) = {float(m3.z_S[-1]):.5f} m (r + e = 0.0475 m)")
+    print(f"Model 4: g_N1 min = {float(m4.g_N1.min()):.3g} m, g_N1(5 s) = {float(m4.g_N1[-1]):.3g} m "
+          "(paper: saturates near -1.36e-5 m)")
+    print(f"Model 4 with quaternion normalisation: g_N1 min = {float(m4n.g_N1.min()):.3g} m, g_N1(5 s) = {float(m4n.g_N1[-1]):.3g} m")
+    return out
+
+
+if __name__ == "__main__":
+    main(*sys.argv[1:2])

@@ -2,20 +2,31 @@
 
 Paper: direct inversion on [0, 0.5] s, damped oscillation about gamma = pi/2, z_S -> r + e;
 quaternion gap drift near -7.5e-6 m.
+
+    python studies/fig11_12_smooth_coulomb.py [OUTPUT_DIR]    (default: output/; or: tippedisk study fig11_12_smooth_coulomb)
 """
 
+import sys
+
 import numpy as np
-from _moreau_study import output_dir, run, save
+from _moreau_study import prepare, run, save
 
 from tippedisk_analysis import plotting
 
-out = output_dir(__doc__)
-m5, m6 = run(out, "m5", 5.0), run(out, "m6", 5.0)
-m6n = run(out, "m6", 5.0, normalize_quaternion=True, tag="normalized")
-save(plotting.simulation_figure(m5), out / "fig11_model5.png")
-save(plotting.gap_figure({"Model 5 (E)": m5, "Model 6 (Q)": m6, "Model 6 (Q, normalised)": m6n}), out / "fig12_gap.png")
-t_inv = float(m5.time[np.argmax(m5.gamma.values > np.pi / 2 - 0.2)])
-print(f"Model 5: gamma first within 0.2 rad of pi/2 at t = {t_inv:.3f} s; z_S(5 s) = {float(m5.z_S[-1]):.5f} m")
-print(f"Model 6: g_N1 min = {float(m6.g_N1.min()):.3g} m, g_N1(5 s) = {float(m6.g_N1[-1]):.3g} m "
-      "(paper: near -7.5e-6 m)")
-print(f"Model 6 with quaternion normalisation: g_N1 min = {float(m6n.g_N1.min()):.3g} m, g_N1(5 s) = {float(m6n.g_N1[-1]):.3g} m")
+
+def main(output_dir: str = "output"):
+    out = prepare(output_dir)
+    m5, m6 = run(out, "m5", 5.0), run(out, "m6", 5.0)
+    m6n = run(out, "m6", 5.0, normalize_quaternion=True, tag="normalized")
+    save(plotting.simulation_figure(m5), out / "fig11_model5.png")
+    save(plotting.gap_figure({"Model 5 (E)": m5, "Model 6 (Q)": m6, "Model 6 (Q, normalised)": m6n}), out / "fig12_gap.png")
+    t_inv = float(m5.time[np.argmax(m5.gamma.values > np.pi / 2 - 0.2)])
+    print(f"Model 5: gamma first within 0.2 rad of pi/2 at t = {t_inv:.3f} s; z_S(5 s) = {float(m5.z_S[-1]):.5f} m")
+    print(f"Model 6: g_N1 min = {float(m6.g_N1.min()):.3g} m, g_N1(5 s) = {float(m6.g_N1[-1]):.3g} m "
+          "(paper: near -7.5e-6 m)")
+    print(f"Model 6 with quaternion normalisation: g_N1 min = {float(m6n.g_N1.min()):.3g} m, g_N1(5 s) = {float(m6n.g_N1[-1]):.3g} m")
+    return out
+
+
+if __name__ == "__main__":
+    main(*sys.argv[1:2])

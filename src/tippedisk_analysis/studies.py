@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import importlib.util
 import os
+import sys
 from pathlib import Path
 
 from .errors import ParameterError
@@ -32,5 +33,9 @@ def run(name: str, output_dir: str = "output"):
     path = folder() / f"{name}.py"
     spec = importlib.util.spec_from_file_location(f"tippedisk_study_{name}", path)
     module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module.main(output_dir)
+    sys.path.insert(0, str(path.parent))  # studies share helpers such as _moreau_study.py
+    try:
+        spec.loader.exec_module(module)
+        return module.main(output_dir)
+    finally:
+        sys.path.remove(str(path.parent))
