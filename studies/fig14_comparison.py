@@ -20,7 +20,7 @@ from tippedisk_analysis import plotting
 
 def main(output_dir: str = "output"):
     out = prepare(output_dir)
-    runs = {f"Model {m[1:]}": run(out, m, 5.0, normalize_quaternion=True) for m in ("m2", "m4", "m6", "m8", "m10")}
+    runs = {f"Model {m[1:]}": run(out, m, 5.0, normalize_quaternion=True, tag="normalized") for m in ("m2", "m4", "m6", "m8", "m10")}
     runs["ODE Model 2"] = run(out, "ode-quaternion", 5.0, dt_output=1e-3)
     save(plotting.comparison_figure(runs), out / "fig14_comparison.png")
     d = runs["Model 6"].gamma.values - runs["ODE Model 2"].gamma.values

@@ -19,7 +19,7 @@ from tippedisk_analysis import plotting
 
 def main(output_dir: str = "output"):
     out = prepare(output_dir)
-    runs = {f"Model {m[1:]}": run(out, m, 25.0, normalize_quaternion=True) for m in ("m4", "m6", "m10")}
+    runs = {f"Model {m[1:]}": run(out, m, 25.0, normalize_quaternion=True, tag="normalized") for m in ("m4", "m6", "m10")}
     runs["ODE Model 2"] = run(out, "ode-quaternion", 25.0, dt_output=1e-3)
     fig = plotting.comparison_figure(runs)
     fig.axes[0].set_ylim(-2.0, 4.5)  # after a fall the disk rolls and gamma runs away

@@ -136,14 +136,16 @@ def config_of(ds: xr.Dataset) -> dict:
 
 
 def save(ds: xr.Dataset, path: str | os.PathLike) -> Path:
-    """Write ``ds`` as netCDF4 atomically: a temporary file renamed into place."""
+    """Write ``ds`` as compressed netCDF4 atomically: a temporary file renamed into place."""
     check_finite(ds)
     path = Path(path)
     if path.parent and not path.parent.exists():
         raise DatasetError(f"directory {str(path.parent)!r} does not exist; create it or choose another --output")
     tmp = path.with_name(path.name + ".part")
     try:
-        ds.to_netcdf(tmp, engine="netcdf4")
+        encoding = {name: {"zlib": True, "complevel": 4} for name, var in ds.data_vars.items()
+                    if np.issubdtype(var.dtype, np.number)}
+        ds.to_netcdf(tmp, engine="netcdf4", encoding=encoding)
         os.replace(tmp, path)
     finally:
         if tmp.exists():
