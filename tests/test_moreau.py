@@ -283,3 +283,34 @@ def test_cli_simulate_moreau_model(tmp_path, capsys):
     assert ds.sizes["time"] == 51
     assert main(["simulate", "--model", "m5", "--store-every", "0", "-o", str(tmp_path / "x.nc")]) == 2
     assert "store_every" in capsys.readouterr().err and not (tmp_path / "x.nc").exists()
+
+
+def test_interrupted_run_resumes_from_its_checkpoint(tmp_path, monkeypatch):
+    """A long run killed midway resumes from its checkpoint and ends as if never interrupted."""
+    from tippedisk_analysis.solvers import moreau
+
+    checkpoint = tmp_path / "run.checkpoint.npz"
+    reference = simulate("m5", 1.2)  # 120,000 steps: 6 chunks of 20,000
+    monkeypatch.setattr(moreau, "CHECKPOINT_SECONDS", 0.0)  # save after every chunk
+    real_chunk, calls = moreau.run_chunk, []
+
+    def dies_after_three_chunks(*args):
+        calls.append(1)
+        if len(calls) > 3:
+            raise KeyboardInterrupt
+        return real_chunk(*args)
+
+    monkeypatch.setattr(moreau, "run_chunk", dies_after_three_chunks)
+    with pytest.raises(KeyboardInterrupt):
+        simulate("m5", 1.2, checkpoint=str(checkpoint))
+    assert checkpoint.exists()
+    monkeypatch.setattr(moreau, "run_chunk", real_chunk)
+    with pytest.raises(ParameterError, match="different run"):
+        simulate("m5", 1.2, checkpoint=str(checkpoint), dt=2e-5)
+    calls.clear()
+    monkeypatch.setattr(moreau, "run_chunk", dies_after_three_chunks)  # only 3 of 6 chunks are left
+    resumed = simulate("m5", 1.2, checkpoint=str(checkpoint))
+    assert not checkpoint.exists()
+    for name in reference.data_vars:
+        np.testing.assert_array_equal(resumed[name].values, reference[name].values, err_msg=name)
+    assert resumed.attrs["n_steps"] == reference.attrs["n_steps"]

@@ -78,6 +78,8 @@ def _simulate(args) -> int:
                                  ("max_iter", args.max_iter), ("progress", args.progress),
                                  ("normalize_quaternion", args.normalize_quaternion or None)) if v is not None}
     output = _writable(args.output)
+    if "checkpoint" in info.options:  # a long run killed midway resumes when the command is repeated
+        options["checkpoint"] = str(output) + ".checkpoint.npz"
     ds = simulate(info.name, args.t_end, setup=setup, initial=InitialState(**init_kw), **options)
     results.save(ds, output)
     print(f"{output}: {ds.attrs['model']} {ds.attrs['status']}: {ds.attrs['message']}")

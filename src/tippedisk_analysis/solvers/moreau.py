@@ -29,10 +29,13 @@ warm-started from the previous step's values for contacts that stay closed.
 
 from __future__ import annotations
 
+import json
 import math
+import os
 import sys
 import time as _time
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from numba import njit
@@ -81,7 +84,7 @@ def _models():
 
 MODELS: dict[str, MoreauModel] = _models()
 OPTIONS = ("dt", "tol", "store_every", "max_iter", "r_N", "r_T", "r_tau", "r_R", "normalize_quaternion",
-           "fall_angle", "progress")
+           "fall_angle", "progress", "checkpoint")
 
 # float parameter vector layout
 (_M, _E, _R, _AS, _BS, _CS, _G, _MU, _EPS, _MUTAU, _MUR, _RC, _EN, _ET, _ETAU, _ER, _DT, _TOL, _RN, _RT, _RTAU,
@@ -455,11 +458,15 @@ def _validate(dt, tol, store_every, max_iter, gains, fall_angle, t_end):
 def integrate(model: MoreauModel, setup: Setup, initial: InitialState, t_end: float, *, dt: float = 1e-5,
               tol: float = 1e-8, store_every: int | None = None, max_iter: int = 1000, r_N: float = 0.1,
               r_T: float = 0.1, r_tau: float = 0.1, r_R: float = 1e-4, normalize_quaternion: bool = False,
-              fall_angle: float | None = None, progress: bool | None = None, state=None):
+              fall_angle: float | None = None, progress: bool | None = None, state=None,
+              checkpoint: str | os.PathLike | None = None):
     """Run the step loop; returns (stored rows, status code, failures, steps, wall time, options used).
 
     ``state = (q, u)`` replaces the closed rest contact of ``initial`` (e.g. a drop test):
     q = [x, y, z, alpha, beta, gamma, 0] or [x, y, z, p0..p3], u = [v_G, Euler rates or Omega_B].
+    ``checkpoint``: a file that receives the loop's full state every ``CHECKPOINT_SECONDS`` of
+    wall time; a later call with the same arguments resumes from it (finished steps are not
+    redone, the result is bitwise that of an uninterrupted run), and it is removed at the end.
     """
     if store_every is None:
         store_every = max(1, int(round(1e-3 / dt)))  # 1 ms sampling: 5000 samples for a 5-s run
@@ -494,6 +501,13 @@ def integrate(model: MoreauModel, setup: Setup, initial: InitialState, t_end: fl
     _gaps(q, R0, exg.copy(), setup.disk.r, np.empty((3, 3)), gaps0)
     out[0, C_GAP:C_GAP + 3] = gaps0
 
+    done, rows, status = 0, 1, 0
+    resume = _Checkpoint(checkpoint, _fingerprint(model, setup, initial, t_end, state, par, ipar)) if checkpoint else None
+    if resume is not None and resume.exists():
+        q, u, exg, Pw, acc, stored, done, status = resume.load()
+        rows = len(stored)
+        out[:rows] = stored
+
     chunk = max(store_every, (20000 // store_every) * store_every)
     expected = n_total * 1e-6  # rough seconds on one core (measured 1e6-6e6 steps/s, benchmarks/)
     show = progress if progress is not None else (expected > 5.0 and sys.stderr.isatty())
@@ -501,9 +515,8 @@ def integrate(model: MoreauModel, setup: Setup, initial: InitialState, t_end: fl
     if show:
         from tqdm import tqdm
 
-        bar = tqdm(total=n_total, unit="step", unit_scale=True, desc=model.name, file=sys.stderr)
-    done, rows, status = 0, 1, 0
-    start = _time.perf_counter()
+        bar = tqdm(total=n_total, initial=done, unit="step", unit_scale=True, desc=model.name, file=sys.stderr)
+    start = last_save = _time.perf_counter()
     try:
         while done < n_total and status == 0:
             n = min(chunk, n_total - done)
@@ -512,13 +525,61 @@ def integrate(model: MoreauModel, setup: Setup, initial: InitialState, t_end: fl
             rows += written
             if bar is not None:
                 bar.update(steps)
+            if resume is not None and _time.perf_counter() - last_save > CHECKPOINT_SECONDS:
+                resume.save(q, u, exg, Pw, acc, out[:rows], done, status)
+                last_save = _time.perf_counter()
     finally:
         if bar is not None:
             bar.close()
     wall = _time.perf_counter() - start
+    if resume is not None:
+        resume.remove()
     options = {"dt": dt, "tol": tol, "store_every": store_every, "max_iter": max_iter, **gains,
                "normalize_quaternion": int(normalize_quaternion), "fall_angle": fall_angle}
     return out[:rows], status, int(acc[3]), done, wall, options
+
+
+CHECKPOINT_SECONDS = 10.0
+
+
+def _fingerprint(model, setup, initial, t_end, state, par, ipar) -> str:
+    """Everything that determines a run, to refuse resuming another run's checkpoint."""
+    return json.dumps({"model": model.name, "setup": to_dict(setup), "initial": to_dict(initial), "t_end": t_end,
+                       "state": None if state is None else np.asarray(state[0]).tolist() + np.asarray(state[1]).tolist(),
+                       "par": par.tolist(), "ipar": ipar.tolist()}, sort_keys=True)
+
+
+class _Checkpoint:
+    """The loop state of a Moreau run in an .npz file, written atomically."""
+
+    def __init__(self, path, fingerprint: str):
+        self.path = Path(path)
+        self.fingerprint = fingerprint
+
+    def exists(self) -> bool:
+        return self.path.is_file()
+
+    def load(self):
+        try:
+            with np.load(self.path) as f:
+                stored = {name: f[name].copy() for name in f.files}
+        except (OSError, ValueError) as exc:
+            raise ParameterError(f"checkpoint {str(self.path)!r} is unreadable ({exc.__class__.__name__}); "
+                                 "delete it to start afresh") from None
+        if str(stored.get("fingerprint")) != self.fingerprint:
+            raise ParameterError(f"checkpoint {str(self.path)!r} belongs to a different run; delete it or "
+                                 "choose another output file")
+        return (stored["q"], stored["u"], stored["exg"], stored["Pw"], stored["acc"], stored["out"],
+                int(stored["done"]), int(stored["status"]))
+
+    def save(self, q, u, exg, Pw, acc, out, done, status) -> None:
+        tmp = self.path.with_name(self.path.name + ".part.npz")
+        np.savez(tmp, fingerprint=self.fingerprint, q=q, u=u, exg=exg, Pw=Pw, acc=acc, out=out, done=done,
+                 status=status)
+        os.replace(tmp, self.path)
+
+    def remove(self) -> None:
+        self.path.unlink(missing_ok=True)
 
 
 def run(model_name: str, setup: Setup, initial: InitialState, t_end: float, **options):
@@ -558,6 +619,9 @@ def run(model_name: str, setup: Setup, initial: InitialState, t_end: float, **op
         ds[name.replace("P_", "lambda_") + "_contact"] = (("time", "contact"), values / used["dt"])
     ds["n_closed"] = ds["n_closed"].astype(np.int8)
     ds["contact"].attrs.update(long_name="candidate contact point C_i", units="1")
+    if model.parameterization == QUATERNION:
+        for name in ("alpha_dot", "beta_dot", "gamma_dot"):
+            ds[name].attrs["comment"] = "set to 0 where the disk is horizontal (sin beta = 0): Euler rates are undefined there"
     return describe(ds)
 
 
