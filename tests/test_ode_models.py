@@ -136,14 +136,14 @@ def test_slow_spin_falls_with_status(model):
 
 
 def test_compiled_integrator_is_reused():
-    first = taylor.compiled("ode-euler", 1e-15)
-    assert taylor.compiled("ode-euler", 1e-15) is first
+    first = taylor.compiled("ode-euler", taylor.DEFAULT_TOL)
+    assert taylor.compiled("ode-euler", taylor.DEFAULT_TOL) is first
 
 
 def test_parameters_are_runtime_parameters():
     """Changing mu changes the run without recompiling; mu = 0 conserves energy."""
     setup = td.Setup(friction=td.Friction(mu=0.0))
-    taylor.compiled("ode-euler", 1e-15)
+    taylor.compiled("ode-euler", taylor.DEFAULT_TOL)
     before = taylor.compiled.cache_info().misses
     ds = td.simulate("ode-euler", 0.5, setup=setup, dt_output=0.01)
     assert taylor.compiled.cache_info().misses == before

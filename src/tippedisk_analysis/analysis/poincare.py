@@ -30,6 +30,7 @@ import numpy as np
 import xarray as xr
 
 from ..errors import ParameterError
+from ..solvers.taylor import DEFAULT_TOL
 from ..models import ode
 from ..parameters import InitialState, Setup, to_dict
 from ..results import describe, make_attrs
@@ -189,7 +190,7 @@ class Crossings:
 
 def crossings(section: Section, *, model_name: str = "ode-euler", setup: Setup | None = None,
               initial: InitialState | None = None, t_transient: float = 0.0, t_end: float = 10.0,
-              max_crossings: int | None = None, tol: float = 1e-15, fall_angle: float = 0.1,
+              max_crossings: int | None = None, tol: float = DEFAULT_TOL, fall_angle: float = 0.1,
               slip_smoothing: float = 1e-12) -> Crossings:
     """Integrate from the initial state and collect the section crossings (raw arrays)."""
     import heyoka as hy
@@ -242,7 +243,7 @@ def _check(t_transient, t_end, max_crossings, tol, fall_angle) -> None:
     if max_crossings is not None and (int(max_crossings) != max_crossings or max_crossings < 1):
         raise ParameterError(f"max_crossings = {max_crossings!r} must be a positive integer")
     if not (math.isfinite(tol) and 0 < tol < 1):
-        raise ParameterError(f"tol = {tol!r} must lie in (0, 1); give e.g. 1e-15")
+        raise ParameterError(f"tol = {tol!r} must lie in (0, 1); give e.g. 1e-14")
     if not (0 < fall_angle < math.pi / 2):
         raise ParameterError("fall_angle must lie in (0, pi/2) rad; give e.g. 0.1")
 
@@ -250,7 +251,7 @@ def _check(t_transient, t_end, max_crossings, tol, fall_angle) -> None:
 def poincare_section(section: str | Section = "beta_dot=0", *, direction: str = "positive",
                      model: str = "ode-euler", setup: Setup | None = None, initial: InitialState | None = None,
                      t_transient: float = 0.0, t_end: float = 10.0, max_crossings: int | None = None,
-                     tol: float = 1e-15, fall_angle: float = 0.1, slip_smoothing: float = 1e-12) -> xr.Dataset:
+                     tol: float = DEFAULT_TOL, fall_angle: float = 0.1, slip_smoothing: float = 1e-12) -> xr.Dataset:
     """Poincaré section of one trajectory as a Dataset (dim ``crossing``).
 
     Integrates from ``initial`` (Table 3 by default) until ``t_end`` [s], ``max_crossings``
