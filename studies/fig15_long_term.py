@@ -11,7 +11,6 @@ The quaternion models run with normalisation after each step: without it the gap
 
 import sys
 
-import numpy as np
 from _moreau_study import prepare, run, save
 
 from tippedisk_analysis import plotting

@@ -54,3 +54,32 @@ def _exit_code(argv):
         return main(argv)
     except SystemExit as exc:
         return exc.code
+
+
+def test_plot_rejects_damaged_dataset_and_unknown_format(tmp_path, capsys):
+    import xarray as xr
+
+    fake = tmp_path / "fake.nc"
+    xr.Dataset({"a": ("x", [1.0])}, attrs={"producer": "tippedisk_analysis", "kind": "simulation"}).to_netcdf(fake)
+    assert main(["plot", str(fake)]) == 2
+    assert "damaged or not one of ours" in capsys.readouterr().err
+    run = tmp_path / "run.nc"
+    assert main(["simulate", "--t-end", "0.05", "--output", str(run)]) == 0
+    assert main(["plot", str(run), "--output", str(tmp_path / "run.txt")]) == 2
+    assert "cannot draw to '.txt'" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fake.nc", "run.nc"]
+
+
+@pytest.mark.parametrize("args, fragment", [(["--fall-angle", "0"], "fall_angle"), (["--tol", "1"], "tol")])
+def test_numerical_options_are_validated(tmp_path, capsys, args, fragment):
+    out = tmp_path / "run.nc"
+    assert main(["simulate", "--t-end", "0.1", "--output", str(out), *args]) == 2
+    assert fragment in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_range_errors_name_the_option(tmp_path, capsys):
+    out = tmp_path / "map.nc"
+    assert _exit_code(["outcome-map", "--omega", "10:80", "--eps", "0.1:0.2:2", "--output", str(out)]) == 2
+    assert "--omega '10:80' is not START:STOP:N" in capsys.readouterr().err
+    assert not out.exists()

@@ -1,4 +1,4 @@
-"""Command line: ``tippedisk simulate | plot | poincare | outcome-map | bifurcation``.
+"""Command line: ``tippedisk simulate | plot | study | stability-map | poincare | outcome-map | bifurcation``.
 
 Thin: parse, call the library, print one line.
 
@@ -97,6 +97,10 @@ def _plot(args) -> int:
 
     ds = results.load(args.dataset)
     output = _writable(args.output or str(Path(args.dataset).with_suffix(".png")))
+    formats = plotting.file_formats()
+    if output.suffix.lower().lstrip(".") not in formats:
+        raise ParameterError(f"cannot draw to {output.suffix or 'a file without suffix'!r}; give --output with one of "
+                             f"{', '.join('.' + f for f in sorted(formats))}")
     plotting.plot_dataset(ds, output)
     print(f"{output}: {ds.attrs['kind']} figure")
     return 0
@@ -173,16 +177,26 @@ def main(argv: list[str] | None = None) -> int:
     except TippediskError as exc:
         print(f"tippedisk {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except MemoryError:
+        print(f"tippedisk {args.command}: error: not enough memory for this request; use fewer grid points "
+              "or a shorter run", file=sys.stderr)
+        return 2
 
 
 # --- trajectory analysis: Poincaré sections, outcome maps, bifurcation diagrams (issue 5) ---
 
 
-def _range(text: str):
-    try:
-        return parse_range(text)
-    except ParameterError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
+def _range(name: str):
+    """argparse type for ``--name START:STOP:N``."""
+
+    def parse(text: str):
+        try:
+            return parse_range(text, name)
+        except ParameterError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+
+    parse.__name__ = f"--{name} range"
+    return parse
 
 
 def _positive_int(text: str) -> int:
@@ -247,12 +261,12 @@ def _poincare(args) -> int:
 
 def _add_outcome_map(sub) -> None:
     p = sub.add_parser("outcome-map", help="classify runs over a grid of (Omega, eps, ...) -> netCDF")
-    p.add_argument("--omega", type=_range, required=True, help="START:STOP:N initial spin Omega [rad/s] "
+    p.add_argument("--omega", type=_range("omega"), required=True, help="START:STOP:N initial spin Omega [rad/s] "
                    "(N values, ends included; write --omega=-50:-10:5 for a negative START)")
-    p.add_argument("--eps", type=_range, required=True, help="START:STOP:N smoothing velocity eps [m/s]")
-    p.add_argument("--mu", type=_range, help="START:STOP:N friction coefficient (default 0.3)")
-    p.add_argument("--e", type=_range, help="START:STOP:N eccentricity [m] (default 2.5e-3)")
-    p.add_argument("--dgamma0", type=_range, help="START:STOP:N gamma(0) + pi/2 [rad] (default 0.1)")
+    p.add_argument("--eps", type=_range("eps"), required=True, help="START:STOP:N smoothing velocity eps [m/s]")
+    p.add_argument("--mu", type=_range("mu"), help="START:STOP:N friction coefficient (default 0.3)")
+    p.add_argument("--e", type=_range("e"), help="START:STOP:N eccentricity [m] (default 2.5e-3)")
+    p.add_argument("--dgamma0", type=_range("dgamma0"), help="START:STOP:N gamma(0) + pi/2 [rad] (default 0.1)")
     p.add_argument("--t-end", type=_finite_float, default=5.0, help="length of each run [s] (default 5)")
     p.add_argument("--window", type=_finite_float, help="classification window at the end [s] (default t_end/5)")
     p.add_argument("--tol", type=_finite_float, default=1e-10, help="integrator tolerance (default 1e-10)")
@@ -278,7 +292,7 @@ def _outcome_map(args) -> int:
 
 def _add_bifurcation(sub) -> None:
     p = sub.add_parser("bifurcation", help="brute-force bifurcation diagram: a quantity at crossings vs Omega")
-    p.add_argument("--omega", type=_range, required=True, help="START:STOP:N initial spin Omega [rad/s]")
+    p.add_argument("--omega", type=_range("omega"), required=True, help="START:STOP:N initial spin Omega [rad/s]")
     p.add_argument("--quantity", default="gamma", help="quantity recorded at the crossings (default gamma)")
     p.add_argument("--dgamma0", type=_finite_float, help="gamma(0) = -pi/2 + dgamma0 [rad] (Table 3: 0.1)")
     p.add_argument("--mu", type=_finite_float, help="friction coefficient (0.3)")

@@ -195,12 +195,23 @@ def comparison_figure(datasets: dict):
 FIGURES = {"simulation": simulation_figure, "stability_map": stability_map_figure}
 
 
+def file_formats() -> set[str]:
+    """File suffixes matplotlib can write (png, pdf, svg, ...)."""
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    return set(FigureCanvasBase.get_supported_filetypes())
+
+
 def plot_dataset(ds: xr.Dataset, path: str | Path) -> Path:
-    """Draw ``ds`` with the figure function registered for its ``kind`` and save a PNG."""
+    """Draw ``ds`` with the figure function registered for its ``kind`` and save it (format from the suffix)."""
     kind = ds.attrs.get("kind")
     if kind not in FIGURES:
         raise DatasetError(f"no figure for datasets of kind {kind!r}; plottable kinds: {', '.join(FIGURES)}")
-    fig = FIGURES[kind](ds)
+    try:
+        fig = FIGURES[kind](ds)
+    except KeyError as exc:
+        plt.close("all")
+        raise DatasetError(f"the {kind} dataset lacks {exc}; it is damaged or not one of ours") from None
     path = Path(path)
     fig.savefig(path, dpi=120)
     plt.close(fig)

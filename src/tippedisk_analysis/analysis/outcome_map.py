@@ -446,6 +446,8 @@ def assemble(config: MapConfig, results: dict) -> xr.Dataset:
         attrs = {"units": units, "long_name": long_name}
         if name in ("inversion_time", "fall_time"):
             attrs["fill_value_meaning"] = f"{FILL_TIME:g} s where the event did not happen"
+        elif name != "outcome":
+            attrs["comment"] = "0 where outcome is failed (non-finite state): mask with the outcome flags"
         data[name] = (dims, np.asarray(results[name], dtype=dtype).reshape(shape), attrs)
     data["outcome"][2].update(
         flag_values=np.array(list(OUTCOMES.values()), dtype=np.int8),

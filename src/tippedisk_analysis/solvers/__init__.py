@@ -74,9 +74,16 @@ def simulate(model: str = "ode-euler", t_end: float = 5.0, *, setup: Setup | Non
         raise ParameterError(f"model {info.name!r} takes no option(s) {sorted(unknown)}; "
                              f"it takes {sorted(info.options)}")
     _check_positive(options, ("dt_output", "tol", "slip_smoothing", "dt"))
-    if "fall_angle" in options and not (isinstance(options["fall_angle"], int | float)
-                                        and 0 <= options["fall_angle"] < math.pi / 2):
-        raise ParameterError("fall_angle must lie in (0, pi/2) rad; give e.g. 0.1")
+    if "tol" in options and not options["tol"] < 1:
+        raise ParameterError(f"tol = {options['tol']!r} must lie in (0, 1); give e.g. 1e-14 (ODE) or 1e-8 (Moreau)")
+    if "fall_angle" in options:
+        # the Euler-angle models need a fall angle > 0 (sin beta = 0 is their singularity);
+        # the quaternion Moreau models may switch the fall check off with 0
+        lowest = 0.0 if info.name.startswith("moreau-") and info.name.endswith("quaternion") else None
+        value = options["fall_angle"]
+        if not (isinstance(value, int | float) and (value > 0 or value == lowest) and value < math.pi / 2):
+            closed = "[0, pi/2)" if lowest == 0.0 else "(0, pi/2)"
+            raise ParameterError(f"fall_angle = {value!r} must lie in {closed} rad for {info.name}; give e.g. 0.1")
     return info.run(setup or Setup(), initial or InitialState(), float(t_end), **options)
 
 
