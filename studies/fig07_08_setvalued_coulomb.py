@@ -8,17 +8,12 @@ the Euler gap g_N1 chatters between 0 and -2e-9 m; the quaternion gap drifts dow
 
 import sys
 
-from _moreau_study import prepare, run, save, window_mean
-
-from tippedisk_analysis import plotting
+from _moreau_study import model_pair, prepare, window_mean
 
 
 def main(output_dir: str = "output"):
     out = prepare(output_dir)
-    m1, m2 = run(out, "m1", 5.0), run(out, "m2", 5.0)
-    m2n = run(out, "m2", 5.0, normalize_quaternion=True, tag="normalized")
-    save(plotting.simulation_figure(m1), out / "fig07_model1.png")
-    save(plotting.gap_figure({"Model 1 (E)": m1, "Model 2 (Q)": m2, "Model 2 (Q, normalised)": m2n}), out / "fig08_gap.png")
+    m1, m2, m2n = model_pair(out, "m1", "m2", (7, 8))
     print(f"Model 1: mean z_S on [1, 5] s = {window_mean(m1, 'z_S', 1, 5):.5f} m (paper ~0.044 m); "
           f"g_N1 in [{float(m1.g_N1.min()):.3g}, {float(m1.g_N1.max()):.3g}] m (paper [-2e-9, 0])")
     print(f"Model 2: g_N1(5 s) = {float(m2.g_N1[-1]):.3g} m (drift), gamma(5 s) = {float(m2.gamma[-1]):.3f} rad")

@@ -9,17 +9,12 @@ quaternion gap drift saturating near -1.36e-5 m.
 import sys
 
 import numpy as np
-from _moreau_study import prepare, run, save
-
-from tippedisk_analysis import plotting
+from _moreau_study import model_pair, prepare
 
 
 def main(output_dir: str = "output"):
     out = prepare(output_dir)
-    m3, m4 = run(out, "m3", 5.0), run(out, "m4", 5.0)
-    m4n = run(out, "m4", 5.0, normalize_quaternion=True, tag="normalized")
-    save(plotting.simulation_figure(m3), out / "fig09_model3.png")
-    save(plotting.gap_figure({"Model 3 (E)": m3, "Model 4 (Q)": m4, "Model 4 (Q, normalised)": m4n}), out / "fig10_gap.png")
+    m3, m4, m4n = model_pair(out, "m3", "m4", (9, 10))
     t_inv = float(m3.time[np.argmax(m3.gamma.values > np.pi / 2 - 0.2)])
     print(f"Model 3: gamma first within 0.2 rad of pi/2 at t = {t_inv:.3f} s (paper: within 0.5 s); "
           f"z_S(5 s) = {float(m3.z_S[-1]):.5f} m (r + e = 0.0475 m)")

@@ -9,17 +9,12 @@ quaternion gap drift near -7.5e-6 m.
 import sys
 
 import numpy as np
-from _moreau_study import prepare, run, save
-
-from tippedisk_analysis import plotting
+from _moreau_study import model_pair, prepare
 
 
 def main(output_dir: str = "output"):
     out = prepare(output_dir)
-    m5, m6 = run(out, "m5", 5.0), run(out, "m6", 5.0)
-    m6n = run(out, "m6", 5.0, normalize_quaternion=True, tag="normalized")
-    save(plotting.simulation_figure(m5), out / "fig11_model5.png")
-    save(plotting.gap_figure({"Model 5 (E)": m5, "Model 6 (Q)": m6, "Model 6 (Q, normalised)": m6n}), out / "fig12_gap.png")
+    m5, m6, m6n = model_pair(out, "m5", "m6", (11, 12))
     t_inv = float(m5.time[np.argmax(m5.gamma.values > np.pi / 2 - 0.2)])
     print(f"Model 5: gamma first within 0.2 rad of pi/2 at t = {t_inv:.3f} s; z_S(5 s) = {float(m5.z_S[-1]):.5f} m")
     print(f"Model 6: g_N1 min = {float(m6.g_N1.min()):.3g} m, g_N1(5 s) = {float(m6.g_N1[-1]):.3g} m "
