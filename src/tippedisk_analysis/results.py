@@ -5,6 +5,11 @@ configuration that produced it as a JSON string (``config``), the package versio
 and ``status`` / ``message`` saying how the run ended. netCDF-safe throughout: no
 complex dtype, no bool or None attributes, categories as int8 with
 ``flag_values`` / ``flag_meanings``. A dataset holding a non-finite value is refused.
+
+Simulation statuses: ``completed`` (reached t_end); ``fell`` (the disk tilted down to the
+fall angle, sin(beta) -> 0, the Euler singularity, and the run ended there); ``not_converged``
+(Moreau: the prox iteration hit its limit in some steps, counted in ``convergence_failures``);
+``nonfinite`` (the state became non-finite; the dataset ends at the last finite sample).
 """
 
 from __future__ import annotations
@@ -71,14 +76,6 @@ VARIABLES: dict[str, tuple[str, str]] = {
     "prox_iterations_max": ("1", "largest number of prox iterations per step in the storage interval"),
     "prox_iterations_mean": ("1", "mean number of prox iterations per step in the storage interval"),
 }
-
-STATUS_MEANINGS = {
-    "completed": "reached t_end",
-    "fell": "the disk tilted down to the fall angle (sin beta -> 0, Euler singularity) and the run ended there",
-    "not_converged": "the prox iteration hit its limit in some steps (counted in convergence_failures)",
-    "nonfinite": "the integrator produced a non-finite state; the dataset ends at the last finite sample",
-}
-
 
 def describe(ds: xr.Dataset) -> xr.Dataset:
     """Attach units and long_name to every known variable and coordinate."""
