@@ -150,7 +150,7 @@ def main():
     for model in mo.MODELS.values():
         rate, (q, u, exg, Pw) = numba_rate(model, setup, args.steps)
         # numpy baseline from the same state; check one step against the numba loop
-        qn, un, en, Pn = numpy_step(model, setup, q.copy(), u.copy(), exg.copy(), Pw.copy(), poly=poly)
+        qn, un, _exg, _Pw = numpy_step(model, setup, q.copy(), u.copy(), exg.copy(), Pw.copy(), poly=poly)
         par, ipar = mo.parameter_vectors(model, setup, dt=1e-5, tol=1e-8, max_iter=1000, r_N=0.1, r_T=0.1,
                                          r_R=1e-4, r_tau=0.1, normalize_quaternion=False, fall_angle=0.0,
                                          store_every=1000)

@@ -46,7 +46,6 @@ from ..models import ode
 from ..parameters import Setup
 
 STATE_NAMES = ("beta", "gamma", "u_x", "u_y", "omega_x", "omega_y", "omega_z")
-STATE_UNITS = ("rad", "rad", "m s-1", "m s-1", "rad s-1", "rad s-1", "rad s-1")
 BRANCHES = {"noninverted": -1.0, "inverted": +1.0}  # sign of gamma = sign * pi/2 (Fig. 6)
 OMEGA_X_INDEX = STATE_NAMES.index("omega_x")  # the direction of the spin family, see stationary_state
 
