@@ -1,6 +1,6 @@
 """Moreau time stepping: steps per second of Models 1-10 (numba, warm) vs a plain numpy step.
 
-Run: ``PYTHONPATH=src python benchmarks/bench_moreau.py [--steps 200000] [--numpy-steps 2000]``.
+Run: ``.venv/bin/python benchmarks/bench_moreau.py [--steps 200000] [--numpy-steps 2000]``.
 Not part of the test suite. The numpy baseline below implements the same step (same
 velocity space, same force laws and prox operators, Jacobi sweep) with numpy arrays and
 :mod:`tippedisk_analysis.kinematics`; its first steps are checked against the numba loop.
@@ -17,13 +17,14 @@ import time
 import numpy as np
 
 from tippedisk_analysis import kinematics as kin
-from tippedisk_analysis.models import moreau_terms as mt
+from tippedisk_analysis.models import prox
 from tippedisk_analysis.parameters import InitialState, Setup
-from tippedisk_analysis.solvers import moreau as mo
+from tippedisk_analysis.solvers.moreau import driver, layout
+from tippedisk_analysis.solvers.moreau import models as mo
 
-prox_disk = mt.prox_disk.py_func
-prox_interval = mt.prox_interval.py_func
-prox_contensou = mt.prox_contensou.py_func
+prox_disk = prox.prox_disk.py_func
+prox_interval = prox.prox_interval.py_func
+prox_contensou = prox.prox_contensou.py_func
 
 
 def numpy_step(model, setup, q, u, exg, Pw, dt=1e-5, tol=1e-8, max_iter=1000, rN=0.1, rT=0.1, rtau=0.1, rR=1e-4,
@@ -128,14 +129,14 @@ def numpy_step(model, setup, q, u, exg, Pw, dt=1e-5, tol=1e-8, max_iter=1000, rN
 
 def numba_rate(model, setup, n_steps):
     """Warm steps/s of the compiled loop, starting from the Table 3 state after 0.1 s."""
-    q, u, exg = mo.initial_state(model, setup, InitialState())
-    par, ipar = mo.parameter_vectors(model, setup, dt=1e-5, tol=1e-8, max_iter=1000, r_N=0.1, r_T=0.1, r_tau=0.1,
+    q, u, exg = driver.initial_state(model, setup, InitialState())
+    par, ipar = driver.parameter_vectors(model, setup, dt=1e-5, tol=1e-8, max_iter=1000, r_N=0.1, r_T=0.1, r_tau=0.1,
                                      r_R=1e-4, normalize_quaternion=False, fall_angle=0.0, store_every=1000)
-    poly, Pw, acc = mt.contensou_polygon(), np.zeros((3, 5)), np.zeros(5)
-    out = np.zeros((n_steps // 1000 + 20, mo.N_COLS))
-    mo.run_chunk(q, u, exg, Pw, par, ipar, poly, 10000, 0, out, 0, acc)  # warm up (compile / cache load)
+    poly, Pw, acc = prox.contensou_polygon(), np.zeros((3, 5)), np.zeros(5)
+    out = np.zeros((n_steps // 1000 + 20, layout.N_COLUMNS))
+    driver.run_steps(q, u, exg, Pw, par, ipar, poly, 10000, 0, out, 0, acc)  # warm up (compile / cache load)
     start = time.perf_counter()
-    mo.run_chunk(q, u, exg, Pw, par, ipar, poly, n_steps, 10000, out, 0, acc)
+    driver.run_steps(q, u, exg, Pw, par, ipar, poly, n_steps, 10000, out, 0, acc)
     return n_steps / (time.perf_counter() - start), (q, u, exg, Pw)
 
 
@@ -145,17 +146,17 @@ def main():
     parser.add_argument("--numpy-steps", type=int, default=1000)
     args = parser.parse_args()
     setup = Setup()
-    poly = mt.contensou_polygon()
+    poly = prox.contensou_polygon()
     print(f"{'model':<48}{'numba steps/s':>15}{'numpy steps/s':>15}{'speed-up':>10}{'check':>10}")
     for model in mo.MODELS.values():
         rate, (q, u, exg, Pw) = numba_rate(model, setup, args.steps)
         # numpy baseline from the same state; check one step against the numba loop
         qn, un, _exg, _Pw = numpy_step(model, setup, q.copy(), u.copy(), exg.copy(), Pw.copy(), poly=poly)
-        par, ipar = mo.parameter_vectors(model, setup, dt=1e-5, tol=1e-8, max_iter=1000, r_N=0.1, r_T=0.1,
+        par, ipar = driver.parameter_vectors(model, setup, dt=1e-5, tol=1e-8, max_iter=1000, r_N=0.1, r_T=0.1,
                                          r_R=1e-4, r_tau=0.1, normalize_quaternion=False, fall_angle=0.0,
                                          store_every=1000)
         qc, uc, ec, Pc = q.copy(), u.copy(), exg.copy(), Pw.copy()
-        mo.run_chunk(qc, uc, ec, Pc, par, ipar, poly, 1, 1, np.zeros((2, mo.N_COLS)), 0, np.zeros(5))
+        driver.run_steps(qc, uc, ec, Pc, par, ipar, poly, 1, 1, np.zeros((2, layout.N_COLUMNS)), 0, np.zeros(5))
         diff = max(np.max(np.abs(qn - qc)), np.max(np.abs(un - uc)) * 1e-5)
         start = time.perf_counter()
         for _ in range(args.numpy_steps):

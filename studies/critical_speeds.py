@@ -1,6 +1,6 @@
 """Critical spin speeds Omega_c(eps) of the inverted branch: the borders of its stable window.
 
-    python studies/critical_speeds.py [OUTPUT_DIR]    (default: output/)
+    tippedisk study critical_speeds [--output-dir DIR] [--quick]
 
 Writes critical_speeds.nc (a stability map refined by bracketing) and critical_speeds.png
 (Omega_c against eps, one curve per crossing).
@@ -16,10 +16,11 @@ import tippedisk_analysis as td
 from tippedisk_analysis.analysis import maps
 
 
-def main(output_dir: str = "output") -> Path:
+def main(output_dir: str = "output", quick: bool = False) -> Path:
     out = Path(output_dir)
     out.mkdir(parents=True, exist_ok=True)
-    ds = maps.stability_map(np.linspace(20.0, 45.0, 251), np.linspace(0.14, 0.36, 45))
+    n_omega, n_eps = (26, 3) if quick else (251, 45)
+    ds = maps.stability_map(np.linspace(20.0, 45.0, n_omega), np.linspace(0.14, 0.36, n_eps))
     path = td.save(ds, out / "critical_speeds.nc")
     curves = maps.critical_speed_curves(ds)
     fig, ax = plt.subplots(figsize=(6.5, 4.5), constrained_layout=True)

@@ -3,18 +3,18 @@
 Paper: inversion on [0, 0.5] s (gamma rises to pi/2), damped oscillation, z_S -> r + e;
 quaternion gap drift saturating near -1.36e-5 m.
 
-    python studies/fig09_10_coulomb_contensou.py [OUTPUT_DIR]    (default: output/; or: tippedisk study fig09_10_coulomb_contensou)
+    tippedisk study fig09_10_coulomb_contensou [--output-dir DIR] [--quick]
 """
 
 import sys
 
 import numpy as np
-from _moreau_study import model_pair, prepare
+from tippedisk_studies._common import model_pair, prepare
 
 
-def main(output_dir: str = "output"):
+def main(output_dir: str = "output", quick: bool = False):
     out = prepare(output_dir)
-    m3, m4, m4n = model_pair(out, "m3", "m4", (9, 10))
+    m3, m4, m4n = model_pair(out, "m3", "m4", (9, 10), t_end=0.3 if quick else 5.0)
     t_inv = float(m3.time[np.argmax(m3.gamma.values > np.pi / 2 - 0.2)])
     print(f"Model 3: gamma first within 0.2 rad of pi/2 at t = {t_inv:.3f} s (paper: within 0.5 s); "
           f"z_S(5 s) = {float(m3.z_S[-1]):.5f} m (r + e = 0.0475 m)")

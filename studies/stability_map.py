@@ -1,6 +1,6 @@
 """Stability of the spinning solutions over spin rate Omega and smoothing eps (ODE Model 1).
 
-    python studies/stability_map.py [OUTPUT_DIR]    (default: output/)
+    tippedisk study stability_map [--output-dir DIR] [--quick]
 
 Writes stability_map.nc (dims branch x omega x eps) and stability_map.png.
 """
@@ -15,10 +15,11 @@ from tippedisk_analysis.analysis import maps
 from tippedisk_analysis.plotting import plot_dataset
 
 
-def main(output_dir: str = "output") -> Path:
+def main(output_dir: str = "output", quick: bool = False) -> Path:
     out = Path(output_dir)
     out.mkdir(parents=True, exist_ok=True)
-    ds = maps.stability_map(np.linspace(0.0, 100.0, 201), np.linspace(0.02, 0.5, 49))
+    n_omega, n_eps = (21, 5) if quick else (201, 49)
+    ds = maps.stability_map(np.linspace(0.0, 100.0, n_omega), np.linspace(0.02, 0.5, n_eps))
     path = td.save(ds, out / "stability_map.nc")
     plot_dataset(ds, path.with_suffix(".png"))
     stable = (ds.n_unstable == 0).sum(["omega", "eps"])

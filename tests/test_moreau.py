@@ -10,9 +10,13 @@ import xarray as xr
 from tippedisk_analysis import kinematics as kin
 from tippedisk_analysis import results, simulate
 from tippedisk_analysis.errors import ParameterError
-from tippedisk_analysis.models import moreau_terms as mt
+from tippedisk_analysis import defaults
+from tippedisk_analysis.models import moreau_geometry as geo
+from tippedisk_analysis.models import prox
 from tippedisk_analysis.parameters import Friction, InitialState, Setup
-from tippedisk_analysis.solvers import moreau, resolve
+from tippedisk_analysis.solvers import resolve
+from tippedisk_analysis.solvers.moreau import dataset, driver, layout
+from tippedisk_analysis.solvers.moreau.models import EULER, MODELS
 
 RNG = np.random.default_rng(7)
 
@@ -31,20 +35,20 @@ def test_kernels_match_kinematics():
         alpha, gamma = RNG.uniform(-np.pi, np.pi, 2)
         beta = RNG.uniform(0.2, np.pi - 0.2)
         rates = RNG.normal(size=3) * 10
-        mt.rotation_euler(alpha, beta, gamma, R)
+        geo.rotation_euler(alpha, beta, gamma, R)
         np.testing.assert_allclose(R, kin.rotation_from_euler(alpha, beta, gamma), atol=1e-15)
         p = kin.quaternion_from_rotation(R)
         Rq = np.empty((3, 3))
-        mt.rotation_quaternion(*p, Rq)
+        geo.rotation_quaternion(*p, Rq)
         np.testing.assert_allclose(Rq, R, atol=1e-14)
-        mt.omega_from_rates(beta, gamma, *rates, w)
+        geo.omega_from_rates(beta, gamma, *rates, w)
         np.testing.assert_allclose(w, kin.omega_from_euler_rates(beta, gamma, rates), atol=1e-13)
-        mt.rates_from_omega(beta, gamma, w, back)
+        geo.rates_from_omega(beta, gamma, w, back)
         np.testing.assert_allclose(back, rates, atol=1e-11)
-        mt.quaternion_rates(*p, *w, pd)
+        geo.quaternion_rates(*p, *w, pd)
         np.testing.assert_allclose(pd, kin.quaternion_rate_entries(*p, *w), atol=1e-14)
-        mt.floating_frame(R, exg)
-        mt.contact_offsets(R, exg, 0.045, off)
+        geo.floating_frame(R, exg)
+        geo.contact_offsets(R, exg, 0.045, off)
         np.testing.assert_allclose(off, kin.contact_point_offsets(R, 0.045), atol=1e-15)
 
 
@@ -59,11 +63,11 @@ def test_jdot_and_contour_direction_from_finite_differences():
         h = 1e-6
         hi = kin.omega_from_euler_rates(beta + h * bd, gamma + h * gd, [ad, bd, gd])
         lo = kin.omega_from_euler_rates(beta - h * bd, gamma - h * gd, [ad, bd, gd])
-        mt.jdot_rates(beta, gamma, ad, bd, gd, a)
+        geo.jdot_rates(beta, gamma, ad, bd, gd, a)
         np.testing.assert_allclose(a, (hi - lo) / (2 * h), rtol=1e-6, atol=1e-6)
         alpha = RNG.uniform(-3, 3)
-        mt.rotation_euler(alpha, beta, gamma, R)
-        mt.contour_direction(R, math.sin(beta), c)
+        geo.rotation_euler(alpha, beta, gamma, R)
+        geo.contour_direction(R, math.sin(beta), c)
         omega = kin.omega_from_euler_rates(beta, gamma, [ad, bd, gd])
         assert math.isclose(c @ omega, gd, rel_tol=1e-10, abs_tol=1e-10)
 
@@ -72,10 +76,10 @@ def test_floating_frame_continuity_when_horizontal():
     """Sect. 2.1: for R33 = 1 the previous e_x^G is kept (made orthogonal to e_z^B), never NaN."""
     exg = np.array([0.6, 0.8, 0.0])
     R = np.eye(3)
-    assert mt.floating_frame(R, exg) == 0.0
+    assert geo.floating_frame(R, exg) == 0.0
     np.testing.assert_allclose(exg, [0.6, 0.8, 0.0])
     off = np.empty((3, 3))
-    mt.contact_offsets(R, exg, 0.045, off)
+    geo.contact_offsets(R, exg, 0.045, off)
     assert np.all(np.isfinite(off)) and np.allclose(off[:, 2], 0.0)
     np.testing.assert_allclose(np.linalg.norm(off, axis=1), 0.045)
 
@@ -88,7 +92,7 @@ def _drop_state(model, beta, height, v0):
     r = Setup().disk.r
     q = np.zeros(7)
     q[2] = r * math.sin(beta) + height
-    if model.parameterization == moreau.EULER:
+    if model.parameterization == EULER:
         q[3:6] = 0.0, beta, 0.0
     else:
         q[3:7] = kin.quaternion_from_rotation(kin.rotation_from_euler(0.0, beta, 0.0))
@@ -101,13 +105,13 @@ def _drop_state(model, beta, height, v0):
 @pytest.mark.parametrize("e_N", [0.0, 0.5])
 def test_drop_and_impact_newton_restitution(name, e_N):
     """Newton's impact law (2.21) on velocity level: gamma_N1^+ = -e_N gamma_N1^- at the impact step."""
-    model = moreau.MODELS[name]
+    model = MODELS[name]
     setup = Setup(friction=Friction(e_N=e_N))
     dt = 1e-5
     state = _drop_state(model, beta=1.2, height=2e-5, v0=-0.3)
-    rows, status, failures, steps, _, _ = moreau.integrate(model, setup, InitialState(), 3e-4, dt=dt,
+    rows, status, failures, steps, _, _ = driver.integrate(model, setup, InitialState(), 3e-4, dt=dt,
                                                            store_every=1, state=state)
-    data = moreau.outputs(model, setup, rows, dt)
+    data = dataset.outputs(model, setup, rows, dt)
     assert status == 0 and failures == 0
     k = int(np.argmax(data["P_N"][:, 0] > 0))  # the impact step
     assert k > 0 and data["P_N"][k, 0] > 0
@@ -214,14 +218,14 @@ def test_setup_parameters_reach_the_kernel():
 
 def test_flat_drop_closes_three_contacts_and_keeps_the_frame():
     """A horizontal disk (quaternions; floating frame undefined, Sect. 2.1) lands on C1-C3 at once."""
-    model = moreau.MODELS["moreau-coulomb-quaternion"]
+    model = MODELS["moreau-coulomb-quaternion"]
     setup = Setup(friction=Friction(e_N=0.5))
     dt = 1e-5
     q = np.array([0.0, 0.0, 5e-6, 1.0, 0.0, 0.0, 0.0])  # flat, G 5 um above the table
     u = np.array([0.0, 0.0, -0.2, 0.0, 0.0, 0.0])
-    rows, status, failures, steps, _, _ = moreau.integrate(model, setup, InitialState(), 2e-3, dt=dt,
+    rows, status, failures, steps, _, _ = driver.integrate(model, setup, InitialState(), 2e-3, dt=dt,
                                                            store_every=1, state=(q, u))
-    data = moreau.outputs(model, setup, rows, dt)
+    data = dataset.outputs(model, setup, rows, dt)
     assert status == 0 and failures == 0 and steps == 200
     assert all(np.all(np.isfinite(v)) for v in data.values())
     k = int(np.argmax(data["n_closed"] == 3))  # impact: all three candidate points at once
@@ -232,13 +236,13 @@ def test_flat_drop_closes_three_contacts_and_keeps_the_frame():
 
 
 def test_nonfinite_state_ends_the_run_with_a_status(monkeypatch):
-    real = moreau.run_chunk
+    real = driver.run_steps
 
     def failing(*args):
         steps, rows, _ = real(*args)
-        return steps, rows, 1  # as if the state became non-finite at the end of the first chunk
+        return steps, rows, layout.STATUS_NONFINITE  # as if the state became non-finite after the first chunk
 
-    monkeypatch.setattr(moreau, "run_chunk", failing)
+    monkeypatch.setattr(driver, "run_steps", failing)
     ds = simulate("m5", 0.5)
     assert ds.attrs["status"] == "nonfinite" and "non-finite" in ds.attrs["message"]
     assert ds.attrs["t_final"] < 0.5
@@ -246,15 +250,15 @@ def test_nonfinite_state_ends_the_run_with_a_status(monkeypatch):
 
 
 def test_step_loop_detects_a_nonfinite_state():
-    model = moreau.MODELS["moreau-smooth-quaternion"]
+    model = MODELS["moreau-smooth-quaternion"]
     setup = Setup()
-    q, u, exg = moreau.initial_state(model, setup, InitialState())
+    q, u, exg = driver.initial_state(model, setup, InitialState())
     u[0] = np.inf
-    par, ipar = moreau.parameter_vectors(model, setup, dt=1e-5, tol=1e-8, max_iter=100, r_N=0.1, r_T=0.1,
+    par, ipar = driver.parameter_vectors(model, setup, dt=1e-5, tol=1e-8, max_iter=100, r_N=0.1, r_T=0.1,
                                          r_tau=0.1, r_R=1e-4, normalize_quaternion=False, fall_angle=0.0,
                                          store_every=1)
-    out = np.zeros((5, moreau.N_COLS))
-    steps, rows, status = moreau.run_chunk(q, u, exg, np.zeros((3, 5)), par, ipar, mt.contensou_polygon(), 3, 0,
+    out = np.zeros((5, layout.N_COLUMNS))
+    steps, rows, status = driver.run_steps(q, u, exg, np.zeros((3, 5)), par, ipar, prox.contensou_polygon(), 3, 0,
                                            out, 0, np.zeros(5))
     assert (steps, rows, status) == (0, 0, 1)
     assert np.all(np.isfinite(q))  # the stored state is the last finite one
@@ -283,17 +287,15 @@ def test_cli_simulate_moreau_model(tmp_path, capsys):
     assert (config["dt"], config["tol"], config["store_every"]) == (2e-5, 1e-9, 10)
     assert ds.sizes["time"] == 51
     assert main(["simulate", "--model", "m5", "--store-every", "0", "-o", str(tmp_path / "x.nc")]) == 2
-    assert "store_every" in capsys.readouterr().err and not (tmp_path / "x.nc").exists()
+    assert "--store-every" in capsys.readouterr().err and not (tmp_path / "x.nc").exists()
 
 
 def test_interrupted_run_resumes_from_its_checkpoint(tmp_path, monkeypatch):
     """A long run killed midway resumes from its checkpoint and ends as if never interrupted."""
-    from tippedisk_analysis.solvers import moreau
-
     checkpoint = tmp_path / "run.checkpoint.npz"
     reference = simulate("m5", 1.2)  # 120,000 steps: 6 chunks of 20,000
-    monkeypatch.setattr(moreau, "CHECKPOINT_SECONDS", 0.0)  # save after every chunk
-    real_chunk, calls = moreau.run_chunk, []
+    monkeypatch.setattr(defaults, "CHECKPOINT_SECONDS", 0.0)  # save after every chunk
+    real_chunk, calls = driver.run_steps, []
 
     def dies_after_three_chunks(*args):
         calls.append(1)
@@ -301,15 +303,15 @@ def test_interrupted_run_resumes_from_its_checkpoint(tmp_path, monkeypatch):
             raise KeyboardInterrupt
         return real_chunk(*args)
 
-    monkeypatch.setattr(moreau, "run_chunk", dies_after_three_chunks)
+    monkeypatch.setattr(driver, "run_steps", dies_after_three_chunks)
     with pytest.raises(KeyboardInterrupt):
         simulate("m5", 1.2, checkpoint=str(checkpoint))
     assert checkpoint.exists()
-    monkeypatch.setattr(moreau, "run_chunk", real_chunk)
+    monkeypatch.setattr(driver, "run_steps", real_chunk)
     with pytest.raises(ParameterError, match="different run"):
         simulate("m5", 1.2, checkpoint=str(checkpoint), dt=2e-5)
     calls.clear()
-    monkeypatch.setattr(moreau, "run_chunk", dies_after_three_chunks)  # only 3 of 6 chunks are left
+    monkeypatch.setattr(driver, "run_steps", dies_after_three_chunks)  # only 3 of 6 chunks are left
     resumed = simulate("m5", 1.2, checkpoint=str(checkpoint))
     assert not checkpoint.exists()
     for name in reference.data_vars:

@@ -10,6 +10,7 @@ import tippedisk_analysis as td
 from tippedisk_analysis import kinematics as kin
 from tippedisk_analysis.models import ode
 from tippedisk_analysis.models.lagrange import LagrangeModel
+from tippedisk_analysis.defaults import TAYLOR_TOL
 from tippedisk_analysis.solvers import taylor
 
 SETUP = td.Setup()
@@ -83,11 +84,11 @@ def test_rhs_matches_independent_lagrangian_model():
     """Newton-Euler about S (heyoka) against M q_dd - h = f_g + W_NT lambda_N, (3.11)/(4.10), in numpy."""
     variables, sys, _fall, outputs = ode.system(ode.EULER)
     rhs = hy.cfunc([f for _, f in sys] + [outputs[ode.OUTPUT_NAMES.index("lambda_N")]], variables)
-    pars = taylor.parameter_values(SETUP, fall_angle=0.1, slip_smoothing=1e-12)
+    pars = ode.parameter_vector(SETUP, fall_angle=0.1, slip_smoothing=1e-12)
     reference = LagrangeModel(SETUP)
     states = _random_manifold_states(12)
     # one zero-slip state (Table 3 start): the heyoka law must stay finite there
-    states = np.vstack([states, taylor.initial_vector(ode.EULER, SETUP, td.InitialState())])
+    states = np.vstack([states, ode.initial_state_vector(ode.EULER, SETUP, td.InitialState())])
     values = rhs(states.T.copy(), pars=np.repeat(pars[: rhs.nparams, None], len(states), axis=1)).T
     assert np.all(np.isfinite(values))
     for state, value in zip(states, values):
@@ -136,14 +137,14 @@ def test_slow_spin_falls_with_status(model):
 
 
 def test_compiled_integrator_is_reused():
-    first = taylor.compiled("ode-euler", taylor.DEFAULT_TOL)
-    assert taylor.compiled("ode-euler", taylor.DEFAULT_TOL) is first
+    first = taylor.compiled("ode-euler", TAYLOR_TOL)
+    assert taylor.compiled("ode-euler", TAYLOR_TOL) is first
 
 
 def test_parameters_are_runtime_parameters():
     """Changing mu changes the run without recompiling; mu = 0 conserves energy."""
     setup = td.Setup(friction=td.Friction(mu=0.0))
-    taylor.compiled("ode-euler", taylor.DEFAULT_TOL)
+    taylor.compiled("ode-euler", TAYLOR_TOL)
     before = taylor.compiled.cache_info().misses
     ds = td.simulate("ode-euler", 0.5, setup=setup, dt_output=0.01)
     assert taylor.compiled.cache_info().misses == before
@@ -152,14 +153,14 @@ def test_parameters_are_runtime_parameters():
 
 def test_nonfinite_state_ends_run_with_status(monkeypatch):
     """eps = 0 at zero slip makes 0/0 in (2.29): the run must end with a status, storing no NaN."""
-    real = taylor.parameter_values
+    real = ode.parameter_vector
 
     def eps_zero(setup, fall_angle, slip_smoothing):
         values = real(setup, fall_angle, 0.0)
         values[ode.PARAMETER_NAMES.index("eps")] = 0.0
         return values
 
-    monkeypatch.setattr(taylor, "parameter_values", eps_zero)
+    monkeypatch.setattr(ode, "parameter_vector", eps_zero)
     ds = td.simulate("ode-euler", 1.0, dt_output=0.01)
     assert ds.attrs["status"] == "nonfinite"
     assert "non-finite" in ds.attrs["message"]

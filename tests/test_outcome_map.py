@@ -16,6 +16,8 @@ from tippedisk_analysis import ParameterError, load
 from tippedisk_analysis.analysis import outcome_map as om
 from tippedisk_analysis.analysis import sweeps
 from tippedisk_analysis.cli import main
+from tippedisk_analysis.models import ode
+from tippedisk_analysis.testing import outcome_chunk_scalar
 
 SRC = str(Path(__file__).resolve().parents[1] / "src")
 SMALL = {"omega": (5.0, 70.0, 6), "eps": (0.05, 0.2, 4)}  # 24 points: 3 batches of 8 lanes
@@ -30,16 +32,14 @@ def test_linspace_semantics():
 
 def test_fast_point_preparation_matches_the_parameter_dataclasses():
     """_prepare edits the base parameter vector; the validated dataclasses must give the same runs."""
-    from tippedisk_analysis.solvers import taylor
-
     cfg = om.MapConfig(ranges={"omega": (-50, 80, 5), "eps": (0.01, 0.3, 3), "mu": (0.1, 0.5, 2),
                                "e": (1e-3, 4e-3, 2), "dgamma0": (0.05, 0.2, 2)}, t_end=0.1)
     x0, pars = om._prepare(cfg, 0, cfg.n_points)
     for i in range(0, cfg.n_points, 7):
         point = {k: v[0] for k, v in cfg.points(i, i + 1).items()}
         setup, initial = om._point_setup(cfg.base_setup(), point)
-        np.testing.assert_array_equal(pars[:, i], taylor.parameter_values(setup, cfg.fall_angle, cfg.slip_smoothing))
-        np.testing.assert_array_equal(x0[:-2, i], taylor.initial_vector(om.ode.EULER, setup, initial))
+        np.testing.assert_array_equal(pars[:, i], ode.parameter_vector(setup, cfg.fall_angle, cfg.slip_smoothing))
+        np.testing.assert_array_equal(x0[:-2, i], ode.initial_state_vector(om.ode.EULER, setup, initial))
         assert initial.alpha_dot == point["omega"] and initial.gamma == pytest.approx(-np.pi / 2 + point["dgamma0"])
 
 
@@ -47,7 +47,7 @@ def test_batch_equals_scalar():
     """SIMD batch lanes (with lanes that fall and are shadowed) = one run at a time."""
     cfg = om.MapConfig(ranges=SMALL, **OPTS)
     batch = om.run_chunk(cfg, 0, cfg.n_points)
-    scalar = om.run_chunk_scalar(cfg, 0, cfg.n_points)
+    scalar = outcome_chunk_scalar(cfg, 0, cfg.n_points)
     assert np.any(batch["outcome"] == om.OUTCOMES["fell"])  # the shadowing path is exercised
     for name in om.RESULT_VARIABLES:
         np.testing.assert_allclose(batch[name], scalar[name], rtol=1e-9, atol=1e-9, err_msg=name)
@@ -114,7 +114,7 @@ KILL_SCRIPT = textwrap.dedent("""
         stored.append(i)
         if len(stored) == 3:
             os.kill(os.getpid(), signal.SIGKILL)  # a hard kill, as from the OOM killer or kill -9
-    sweeps.run_sweep(cfg, output=sys.argv[1], threads=1, progress=False, on_chunk=on_chunk)
+    sweeps.run_sweep(om.sweep(cfg), output=sys.argv[1], threads=1, progress=False, on_chunk=on_chunk)
 """)
 
 
@@ -130,8 +130,8 @@ def test_killed_run_resumes_without_recomputing(tmp_path):
     before = {p.name: p.stat().st_mtime_ns for p in finished}
 
     cfg = om.MapConfig(ranges=SMALL, **OPTS)
-    with pytest.raises(ParameterError, match="different outcome-map configuration"):
-        sweeps.run_sweep(om.MapConfig(ranges=SMALL, t_end=0.5, chunk_size=8), output=out, progress=False)
+    with pytest.raises(ParameterError, match="different outcome map configuration"):
+        sweeps.run_sweep(om.sweep(om.MapConfig(ranges=SMALL, t_end=0.5, chunk_size=8)), output=out, progress=False)
 
     computed = []
 
@@ -140,11 +140,11 @@ def test_killed_run_resumes_without_recomputing(tmp_path):
         for name, mtime in before.items():  # finished chunks are neither rewritten nor removed
             assert (d / name).stat().st_mtime_ns == mtime
 
-    resumed = sweeps.run_sweep(cfg, output=out, progress=False, on_chunk=on_chunk)
+    resumed = sweeps.run_sweep(om.sweep(cfg), output=out, progress=False, on_chunk=on_chunk)
     done = {int(name[6:11]) for name in before}
-    assert sorted(computed) == sorted(set(range(len(sweeps.chunk_bounds(cfg)))) - done)
+    assert sorted(computed) == sorted(set(range(len(sweeps.chunk_bounds(om.sweep(cfg))))) - done)
 
-    fresh = sweeps.run_sweep(cfg, output=tmp_path / "fresh.nc", progress=False)
+    fresh = sweeps.run_sweep(om.sweep(cfg), output=tmp_path / "fresh.nc", progress=False)
     xr.testing.assert_identical(load(out), load(tmp_path / "fresh.nc"))
     xr.testing.assert_identical(resumed, fresh)
 
@@ -154,8 +154,8 @@ def test_dask_local_cluster_equals_threads():
     cfg = om.MapConfig(ranges=SMALL, **OPTS)
     with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
                                   dashboard_address=None) as cluster, distributed.Client(cluster) as client:
-        on_dask = sweeps.run_sweep(cfg, scheduler=client, progress=False)
-    xr.testing.assert_identical(on_dask, sweeps.run_sweep(cfg, progress=False))
+        on_dask = sweeps.run_sweep(om.sweep(cfg), scheduler=client, progress=False)
+    xr.testing.assert_identical(on_dask, sweeps.run_sweep(om.sweep(cfg), progress=False))
 
 
 @pytest.mark.parametrize("args", [
@@ -219,8 +219,8 @@ def test_error_in_a_chunk_keeps_the_stored_chunks(tmp_path):
             raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
-        sweeps.run_sweep(cfg, output=out, threads=1, progress=False, on_chunk=stop_after_two)
+        sweeps.run_sweep(om.sweep(cfg), output=out, threads=1, progress=False, on_chunk=stop_after_two)
     assert len(list(sweeps.chunk_dir(out).glob("chunk_*.nc"))) == 2 and not out.exists()
     computed = []
-    sweeps.run_sweep(cfg, output=out, progress=False, on_chunk=computed.append)
-    assert len(computed) == len(sweeps.chunk_bounds(cfg)) - 2 and out.exists()
+    sweeps.run_sweep(om.sweep(cfg), output=out, progress=False, on_chunk=computed.append)
+    assert len(computed) == len(sweeps.chunk_bounds(om.sweep(cfg))) - 2 and out.exists()

@@ -14,6 +14,7 @@ from tippedisk_analysis.analysis import poincare
 from tippedisk_analysis.analysis.bifurcation import bifurcation_diagram
 from tippedisk_analysis.cli import main
 from tippedisk_analysis.parameters import InitialState, Setup
+from tippedisk_analysis.models import ode
 from tippedisk_analysis.solvers import taylor
 
 TOL = 1e-12  # one tolerance for the whole file: each compiled integrator is built once
@@ -40,9 +41,9 @@ def test_crossing_states_match_a_second_integration(beta_section):
     for k in (0, beta_section.sizes["crossing"] // 2, -1):
         t_k = float(beta_section["time"][k])
         ta = copy.copy(cm.integrator)
-        ta.pars[:] = taylor.parameter_values(setup, 0.1, 1e-12)
+        ta.pars[:] = ode.parameter_vector(setup)
         ta.time = 0.0
-        ta.state[:] = taylor.initial_vector(cm.model, setup, initial)
+        ta.state[:] = ode.initial_state_vector(cm.model, setup, initial)
         ta.reset_cooldowns()
         ta.propagate_until(t_k)
         expected = np.asarray(ta.state)

@@ -6,15 +6,15 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from tippedisk_analysis.models import moreau_terms as mt
+from tippedisk_analysis.models import prox
 
 coord = st.floats(min_value=-10.0, max_value=10.0, allow_nan=False)
 radius = st.one_of(st.just(0.0), st.floats(min_value=1e-12, max_value=5.0))
-POLY = mt.contensou_polygon()
+POLY = prox.contensou_polygon()
 
 
 def contensou(v, rad):
-    return np.array(mt.prox_contensou(v[0], v[1], v[2], rad, POLY))
+    return np.array(prox.prox_contensou(v[0], v[1], v[2], rad, POLY))
 
 
 def in_contensou_set(v, rad, slack=1e-9):
@@ -28,11 +28,11 @@ def in_contensou_set(v, rad, slack=1e-9):
 
 
 PROJECTIONS = {
-    "nonneg": (lambda v, rad: np.array([mt.prox_nonneg(v[0])]), 1,
+    "nonneg": (lambda v, rad: np.array([prox.prox_nonneg(v[0])]), 1,
                lambda v, rad: v[0] >= 0),
-    "interval": (lambda v, rad: np.array([mt.prox_interval(v[0], rad)]), 1,
+    "interval": (lambda v, rad: np.array([prox.prox_interval(v[0], rad)]), 1,
                  lambda v, rad: abs(v[0]) <= rad * (1 + 1e-12)),
-    "disk": (lambda v, rad: np.array(mt.prox_disk(v[0], v[1], rad)), 2,
+    "disk": (lambda v, rad: np.array(prox.prox_disk(v[0], v[1], rad)), 2,
              lambda v, rad: math.hypot(v[0], v[1]) <= rad * (1 + 1e-12) + 1e-300),
     "contensou": (contensou, 3, in_contensou_set),
 }
@@ -73,10 +73,10 @@ def test_contensou_ball_shape():
     assert np.all(np.diff(slopes) <= 1e-12)  # concave boundary: convex set
     # the boundary follows the first branch of (2.27) at small xi_bar
     xi = 0.3
-    x = xi / mt.XI_STAR
-    eta = mt.ETA_STAR * math.sqrt(64 / 9 * (1 - 9 / 8 * x**2 + 243 / 1024 * x**4))
+    x = xi / prox.XI_STAR
+    eta = prox.ETA_STAR * math.sqrt(64 / 9 * (1 - 9 / 8 * x**2 + 243 / 1024 * x**4))
     assert abs(np.interp(xi, POLY[:, 0], POLY[:, 1]) - eta) < 1e-4
     # radial projection of pure sliding beyond the ball lands on mu P_N
-    np.testing.assert_allclose(mt.prox_contensou(3.0, 4.0, 0.0, 2.0, POLY), (1.2, 1.6, 0.0), atol=1e-6)
-    np.testing.assert_allclose(mt.prox_contensou(0.0, 0.0, -5.0, 2.0, POLY), (0, 0, -2 * 3 * math.pi / 16),
+    np.testing.assert_allclose(prox.prox_contensou(3.0, 4.0, 0.0, 2.0, POLY), (1.2, 1.6, 0.0), atol=1e-6)
+    np.testing.assert_allclose(prox.prox_contensou(0.0, 0.0, -5.0, 2.0, POLY), (0, 0, -2 * 3 * math.pi / 16),
                                atol=1e-12)

@@ -5,6 +5,7 @@ import pytest
 import xarray as xr
 
 import tippedisk_analysis as td
+from tippedisk_analysis.defaults import TAYLOR_TOL
 from tippedisk_analysis import results
 from tippedisk_analysis.solvers import taylor
 
@@ -32,7 +33,7 @@ def test_attributes_are_netcdf_safe_and_hold_the_configuration(short_run):
     assert config["model"] == "ode-quaternion"
     assert config["setup"]["friction"]["eps"] == 0.1
     assert config["initial"]["alpha_dot"] == 40.0
-    assert config["integrator"]["tol"] == taylor.DEFAULT_TOL
+    assert config["integrator"]["tol"] == TAYLOR_TOL
     assert short_run.attrs["producer_version"] == td.__version__
     assert short_run.attrs["status"] == "completed"
     json.dumps(config)

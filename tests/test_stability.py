@@ -6,17 +6,19 @@ import numpy as np
 import pytest
 
 import tippedisk_analysis as td
-from tippedisk_analysis.analysis import stability as sb
+from tippedisk_analysis.analysis import reduced, stability
 from tippedisk_analysis.analysis import stationary as st
+from tippedisk_analysis.models import ode
+from tippedisk_analysis.testing import finite_difference_jacobian
 
-PARS = st.parameter_vector()
+PARS = ode.parameter_vector()
 
 
 def test_jacobian_matches_finite_differences_away_from_zero_slip():
     x = st.stationary_state("noninverted", [40.0])[:, 0] + np.array([0.01, 0.02, 0.003, -0.002, 0.5, 0.3, -0.2])
-    assert np.hypot(*st.evaluate(x, PARS)["slip"][:, 0]) > 1e-3  # a smooth point of (2.29)
-    J = sb.jacobian(x, PARS)[0]
-    np.testing.assert_allclose(J, sb.finite_difference_jacobian(x, PARS, h=1e-6), rtol=0,
+    assert np.hypot(*reduced.evaluate(x, PARS)["slip"][:, 0]) > 1e-3  # a smooth point of (2.29)
+    J = reduced.jacobian(x, PARS)[0]
+    np.testing.assert_allclose(J, finite_difference_jacobian(x, PARS, h=1e-6), rtol=0,
                                atol=1e-7 * np.abs(J).max())
 
 
@@ -24,9 +26,9 @@ def test_jacobian_matches_finite_differences_away_from_zero_slip():
 def test_jacobian_is_finite_at_zero_slip_and_finite_differences_converge_to_it(branch):
     """At zero slip |gamma_T| has a kink, so central differences are first-order accurate there."""
     x = st.stationary_state(branch, [40.0])[:, 0]
-    J = sb.jacobian(x, PARS)[0]
+    J = reduced.jacobian(x, PARS)[0]
     assert np.all(np.isfinite(J))
-    errors = [np.abs(sb.finite_difference_jacobian(x, PARS, h=h) - J).max() / np.abs(J).max() for h in (1e-6, 1e-7)]
+    errors = [np.abs(finite_difference_jacobian(x, PARS, h=h) - J).max() / np.abs(J).max() for h in (1e-6, 1e-7)]
     assert errors[1] < 2e-5
     assert errors[1] < 0.2 * errors[0]  # converging (first order: factor 10)
 
@@ -37,35 +39,35 @@ def test_zero_slip_linearisation_depends_on_mu_over_eps_only():
     p2 = PARS.copy()
     p2[7] *= 2.0  # mu
     p2[8] *= 2.0  # eps
-    np.testing.assert_allclose(sb.jacobian(x, p2), sb.jacobian(x, PARS), rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(reduced.jacobian(x, p2), reduced.jacobian(x, PARS), rtol=1e-12, atol=1e-12)
     p3 = PARS.copy()
     p3[8] *= 2.0
-    assert not np.allclose(sb.jacobian(x, p3), sb.jacobian(x, PARS))
+    assert not np.allclose(reduced.jacobian(x, p3), reduced.jacobian(x, PARS))
 
 
 @pytest.mark.parametrize("branch", list(st.BRANCHES))
 def test_structural_zero_and_eigenvectors(branch):
     x = st.stationary_state(branch, [40.0])
-    J = sb.jacobian(x, PARS)[0]
+    J = reduced.jacobian(x, PARS)[0]
     scale = np.abs(J).max()
-    assert np.abs(J[:, st.OMEGA_X_INDEX]).max() < 1e-12 * scale  # d x*/d Omega is a null vector
+    assert np.abs(J[:, reduced.OMEGA_X_INDEX]).max() < 1e-12 * scale  # d x*/d Omega is a null vector
     full = np.linalg.eigvals(J)
-    nontrivial = sb.nontrivial_eigenvalues(J)
+    nontrivial = stability.nontrivial_eigenvalues(J)
     assert np.min(np.abs(full)) < 1e-10 * scale
     for s in nontrivial:  # every nontrivial eigenvalue is one of J's
         assert np.min(np.abs(full - s)) < 1e-8 * scale
-    vals, vecs = sb.eigen(J)
+    vals, vecs = stability.eigen(J)
     np.testing.assert_allclose(vals, nontrivial)
     np.testing.assert_allclose(J @ vecs, vecs * vals, atol=1e-9 * scale)
     assert np.all(np.diff(vals.real) <= 0)
 
 
 def test_classification_tolerance():
-    stable, marginal, unstable = sb.STABILITY_FLAGS.values()
+    stable, marginal, unstable = stability.STABILITY_FLAGS.values()
     ev = np.array([[-1 + 2j, -1 - 2j, -3, -4, -5, -6],
                    [1e-13 + 5j, 1e-13 - 5j, -3, -4, -5, -6],
                    [0.5, -1, -3, -4, -5, -6]])
-    flags, n_unstable, max_re = sb.classify(ev)
+    flags, n_unstable, max_re = stability.classify(ev)
     assert list(flags) == [stable, marginal, unstable]
     assert list(n_unstable) == [0, 0, 1]
     np.testing.assert_allclose(max_re, [-1, 1e-13, 0.5])
@@ -75,14 +77,14 @@ def _measured_rates(branch, omega, eps, d_gamma, t_end, window, modes):
     """Growth rates of the modal amplitudes in a heyoka simulation started near the stationary solution."""
     sign = st.BRANCHES[branch]
     setup = td.Setup(friction=td.Friction(eps=eps))
-    pars = st.parameter_vector(setup)
+    pars = ode.parameter_vector(setup)
     ds = td.simulate("ode-euler", t_end, setup=setup, dt_output=2e-3,
                      initial=td.InitialState(alpha_dot=omega, beta=math.pi / 2, gamma=sign * math.pi / 2 + d_gamma,
                                              gamma_dot=0.0))
     assert ds.attrs["status"] == "completed"
-    x = st.reduced_from_full(*(ds[v].values for v in ("alpha", "beta", "gamma", "x_dot", "y_dot",
+    x = reduced.reduced_from_full(*(ds[v].values for v in ("alpha", "beta", "gamma", "x_dot", "y_dot",
                                                           "omega_x", "omega_y", "omega_z")))
-    vals, c = sb.modal_coordinates(x, branch, omega, pars)
+    vals, c = stability.modal_coordinates(x, branch, omega, pars)
     t = ds["time"].values
     m = (t >= window[0]) & (t <= window[1])
     measured = [np.polyfit(t[m], np.log(np.abs(c[k, m])), 1)[0] for k in modes]
@@ -112,8 +114,8 @@ def test_batched_evaluation_matches_pointwise():
     omega = rng.uniform(-80, 80, 6)
     pars = np.repeat(PARS[:, None], 6, axis=1)
     pars[8] = rng.uniform(0.01, 1.0, 6)  # eps per point
-    batch = sb.spectrum("inverted", omega, pars)
+    batch = stability.spectrum("inverted", omega, pars)
     for i in range(6):
-        single = sb.spectrum("inverted", [omega[i]], pars[:, i])
+        single = stability.spectrum("inverted", [omega[i]], pars[:, i])
         np.testing.assert_array_equal(batch.jacobian[i], single.jacobian[0])
         np.testing.assert_allclose(batch.eigenvalues[i], single.eigenvalues[0], rtol=1e-12, atol=1e-12)

@@ -10,10 +10,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as hs
 
 from tippedisk_analysis import Disk, Friction, ParameterError, Setup
+from tippedisk_analysis.analysis import reduced
 from tippedisk_analysis.analysis import stationary as st
 from tippedisk_analysis.models import ode
 
-PARS = st.parameter_vector()
+PARS = ode.parameter_vector()
 
 
 @pytest.mark.parametrize("branch", list(st.BRANCHES))
@@ -21,14 +22,12 @@ PARS = st.parameter_vector()
 @given(omega=hs.floats(-300, 300), eps=hs.floats(1e-3, 2.0), mu=hs.floats(0.0, 1.5), e=hs.floats(0.0, 4e-3))
 def test_stationary_solutions_are_equilibria(branch, omega, eps, mu, e):
     setup = Setup(disk=dataclasses.replace(Disk(), e=e), friction=Friction(mu=mu, eps=eps))
-    pars = st.parameter_vector(setup)
+    pars = ode.parameter_vector(setup)
     x = st.stationary_state(branch, omega)
-    ev = st.evaluate(x, pars)
+    ev = reduced.evaluate(x, pars)
     # round-off level: pi/2 is not a double (cos(pi/2) = 6e-17), so the residual is J delta with
     # |delta| ~ 1e-16 |x|; bound it by 1e-14 |J| (1 + |x|) with the exact Jacobian of stability.py
-    from tippedisk_analysis.analysis.stability import jacobian
-
-    tol = 1e-14 * np.abs(jacobian(x, pars)).max() * (1.0 + np.abs(x).max())
+    tol = 1e-14 * np.abs(reduced.jacobian(x, pars)).max() * (1.0 + np.abs(x).max())
     assert np.max(np.abs(ev["rhs"])) <= tol
     assert ev["alpha_dot"][0] == pytest.approx(omega, abs=1e-12 * (1 + abs(omega)))
     assert np.max(np.abs(ev["slip"])) <= 1e-14 * (1 + abs(omega))  # no slip
@@ -62,7 +61,7 @@ def test_reduced_rhs_is_the_rotated_full_model():
                           r * math.cos(beta) * beta_dot, *w, 0.0])
         f = full(state, pars=PARS[: full.nparams])
         alpha_dot = f[3]
-        red = st.evaluate(np.array([beta, gamma, *u, *w]), PARS)["rhs"][:, 0]
+        red = reduced.evaluate(np.array([beta, gamma, *u, *w]), PARS)["rhs"][:, 0]
         a_R = [ca * f[6] + sa * f[7], -sa * f[6] + ca * f[7]]
         expected = [f[4], f[5], a_R[0] + alpha_dot * u[1], a_R[1] - alpha_dot * u[0], *f[9:12]]
         np.testing.assert_allclose(red, expected, rtol=1e-12, atol=1e-12 * np.max(np.abs(expected)))

@@ -4,8 +4,7 @@ Sailer, Eugster, Leine, "The Tippedisk: a Tippetop Without Rotational Symmetry",
 Regul. Chaotic Dyn. 25 (2020) 553-580.
 """
 
-__version__ = "0.1.0"
-
+from .version import __version__
 from .errors import DatasetError, IntegrationError, ParameterError, TippediskError, UnknownModelError
 from .parameters import Disk, Friction, InitialState, Setup
 from .results import load, save

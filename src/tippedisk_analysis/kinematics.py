@@ -58,6 +58,18 @@ def euler_rate_entries_from_omega(beta, gamma, omega_x, omega_y, omega_z, xp=np)
     return [alpha_dot, omega_x * cg - omega_y * sg, omega_z - cb * alpha_dot]
 
 
+def omega_derivative_entries_at_fixed_rates(beta, gamma, alpha_dot, beta_dot, gamma_dot, xp=np):
+    """J_R_dot phi_dot: the time derivative of (3.3) with the Euler rates held fixed (the
+    velocity-dependent part of the angular acceleration, Psi = J_R phi_dd + J_R_dot phi_dot)."""
+    sb, cb = xp.sin(beta), xp.cos(beta)
+    sg, cg = xp.sin(gamma), xp.cos(gamma)
+    return [
+        alpha_dot * (cb * beta_dot * sg + sb * cg * gamma_dot) - beta_dot * sg * gamma_dot,
+        alpha_dot * (cb * beta_dot * cg - sb * sg * gamma_dot) - beta_dot * cg * gamma_dot,
+        -alpha_dot * sb * beta_dot,
+    ]
+
+
 def quaternion_rate_entries(p0, p1, p2, p3, omega_x, omega_y, omega_z):
     """p_dot = 1/2 H_bar^T omega, (3.44)-(3.45)."""
     return [

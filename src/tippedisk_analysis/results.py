@@ -14,6 +14,7 @@ fall angle, sin(beta) -> 0, the Euler singularity, and the run ended there); ``n
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 from pathlib import Path
@@ -22,6 +23,7 @@ import numpy as np
 import xarray as xr
 
 from .errors import DatasetError
+from .version import __version__
 
 PRODUCER = "tippedisk_analysis"
 
@@ -96,8 +98,6 @@ def check_finite(ds: xr.Dataset) -> None:
 
 def make_attrs(kind: str, config: dict, status: str, message: str, **extra) -> dict:
     """Dataset attributes in netCDF-safe types."""
-    from . import __version__
-
     attrs = {
         "producer": PRODUCER,
         "producer_version": __version__,
@@ -118,8 +118,6 @@ def make_attrs(kind: str, config: dict, status: str, message: str, **extra) -> d
 
 def flat_parameters(setup) -> dict:
     """Physical parameters as flat attributes, e.g. ``disk_r``, ``friction_eps``, ``gravity``."""
-    import dataclasses
-
     flat = {"gravity": setup.gravity}
     for group in ("disk", "friction"):
         for key, value in dataclasses.asdict(getattr(setup, group)).items():

@@ -21,15 +21,15 @@ import numpy as np
 import xarray as xr
 from scipy.optimize import brentq
 
+from ..defaults import CRITICAL_RTOL, EIG_ATOL, EIG_RTOL, SLIP_SMOOTHING
 from ..errors import ParameterError
 from ..models import ode
 from ..parameters import Setup, to_dict
 from ..results import make_attrs
-from . import stability as sb
+from . import reduced, stability
 from . import stationary as st
 
 BRANCH_NAMES = tuple(st.BRANCHES)
-CRITICAL_RTOL = 1e-10  # brentq relative tolerance on Omega_c (1e-6 required)
 CRITICAL_PAD = -1.0e30  # padding of omega_critical beyond n_critical (not a _FillValue: never masked to NaN)
 SWEEPABLE = {"eps": ("m s-1", "smoothing velocity eps of the regularised Coulomb law (2.29)"),
              "mu": ("1", "friction coefficient mu (2.29)"),
@@ -47,9 +47,7 @@ def _validated(setup: Setup, name: str, values: np.ndarray) -> None:
 
 def _parameter_grid(setup: Setup, sweeps: dict, slip_smoothing: float, shape) -> np.ndarray:
     """(11, prod(shape)) runtime parameters, ode.PARAMETER_NAMES order, for the flattened grid."""
-    from ..solvers.taylor import parameter_values
-
-    base = parameter_values(setup, fall_angle=0.1, slip_smoothing=slip_smoothing)
+    base = ode.parameter_vector(setup, slip_smoothing=slip_smoothing)
     pars = np.repeat(base[:, None], int(np.prod(shape)), axis=1)
     dims = list(sweeps)
     for axis, name in enumerate(dims, start=1):  # axis 0 is omega
@@ -61,7 +59,7 @@ def _parameter_grid(setup: Setup, sweeps: dict, slip_smoothing: float, shape) ->
 
 
 def stability_map(omega, eps, *, mu=None, e=None, setup: Setup | None = None,
-                  slip_smoothing: float = 1e-12, critical: bool = True) -> xr.Dataset:
+                  slip_smoothing: float = SLIP_SMOOTHING, critical: bool = True) -> xr.Dataset:
     """Eigenvalue stability of both spinning branches on the grid omega x eps (x mu x e).
 
     omega [rad/s] and eps [m/s]: 1-D arrays (dims of the result); mu [-] and e [m]: None
@@ -86,10 +84,10 @@ def stability_map(omega, eps, *, mu=None, e=None, setup: Setup | None = None,
                               "residual")}
     for branch in BRANCH_NAMES:
         x = st.stationary_state(branch, om_flat)
-        spec = sb.spectrum(branch, om_flat, pars)
-        ev = st.evaluate(x, pars)
-        fields["eig_real"].append(spec.eigenvalues.real.reshape(*shape, sb.N_EIG))
-        fields["eig_imag"].append(spec.eigenvalues.imag.reshape(*shape, sb.N_EIG))
+        spec = stability.spectrum(branch, om_flat, pars)
+        ev = reduced.evaluate(x, pars)
+        fields["eig_real"].append(spec.eigenvalues.real.reshape(*shape, stability.N_EIG))
+        fields["eig_imag"].append(spec.eigenvalues.imag.reshape(*shape, stability.N_EIG))
         fields["max_real_eig"].append(spec.max_real_eig.reshape(shape))
         fields["n_unstable"].append(spec.n_unstable.reshape(shape))
         fields["stability"].append(spec.stability.reshape(shape))
@@ -111,9 +109,9 @@ def stability_map(omega, eps, *, mu=None, e=None, setup: Setup | None = None,
                 "units": "1", "long_name": "number of eigenvalues with real part above the tolerance"}),
             "stability": (bdims, np.stack(fields["stability"]).astype(np.int8), {
                 "long_name": "linear stability of the stationary solution",
-                "flag_values": np.array(list(sb.STABILITY_FLAGS.values()), dtype=np.int8),
-                "flag_meanings": " ".join(sb.STABILITY_FLAGS),
-                "comment": f"tolerance on real parts: {sb.ATOL:g} s-1 + {sb.RTOL:g} * max |eigenvalue|"}),
+                "flag_values": np.array(list(stability.STABILITY_FLAGS.values()), dtype=np.int8),
+                "flag_meanings": " ".join(stability.STABILITY_FLAGS),
+                "comment": f"tolerance on real parts: {EIG_ATOL:g} s-1 + {EIG_RTOL:g} * max |eigenvalue|"}),
             "lambda_N": (bdims, np.stack(fields["lambda_N"]), {
                 "units": "N", "long_name": "normal contact force at C1 of the stationary solution"}),
             "residual": (bdims, np.stack(fields["residual"]), {
@@ -128,7 +126,7 @@ def stability_map(omega, eps, *, mu=None, e=None, setup: Setup | None = None,
             "omega": ("omega", omega, {"units": "rad s-1", "long_name": "spin rate alpha_dot = Omega"}),
             **{name: (name, values, {"units": SWEEPABLE[name][0], "long_name": SWEEPABLE[name][1]})
                for name, values in sweeps.items()},
-            "eig": ("eig", np.arange(sb.N_EIG, dtype=np.int32), {"long_name": "eigenvalue index (by real part)"}),
+            "eig": ("eig", np.arange(stability.N_EIG, dtype=np.int32), {"long_name": "eigenvalue index (by real part)"}),
         },
     )
     n_found = 0
@@ -141,8 +139,8 @@ def stability_map(omega, eps, *, mu=None, e=None, setup: Setup | None = None,
         "omega": _range_config(omega),
         **{name: _range_config(values) for name, values in sweeps.items()},
         "slip_smoothing": slip_smoothing,
-        "reduced_state": list(st.STATE_NAMES),
-        "stability_tolerance": {"atol": sb.ATOL, "rtol": sb.RTOL},
+        "reduced_state": list(reduced.STATE_NAMES),
+        "stability_tolerance": {"atol": EIG_ATOL, "rtol": EIG_RTOL},
         "critical_rtol": CRITICAL_RTOL,
         "heyoka_version": hy.__version__,
     }
@@ -167,7 +165,7 @@ def _range_config(values: np.ndarray) -> dict:
     return {"start": float(values[0]), "stop": float(values[-1]), "n": int(values.size)}
 
 
-def critical_speeds(ds: xr.Dataset, *, setup: Setup | None = None, slip_smoothing: float = 1e-12) -> xr.Dataset:
+def critical_speeds(ds: xr.Dataset, *, setup: Setup | None = None, slip_smoothing: float = SLIP_SMOOTHING) -> xr.Dataset:
     """Omega_c: zeros of max_real_eig along ``omega`` of a map, refined by brentq.
 
     Returns ``omega_critical`` [rad/s] (branch, other dims, crossing), padded with
@@ -217,7 +215,7 @@ def critical_speeds(ds: xr.Dataset, *, setup: Setup | None = None, slip_smoothin
 def _roots(branch: str, omega: np.ndarray, mre: np.ndarray, pars: np.ndarray) -> list[tuple[float, int, float]]:
     """Sign changes of max_real_eig on the grid, refined: (Omega_c, direction, frequency)."""
     def f(om):
-        return sb.max_real_eig(branch, om, pars)
+        return stability.max_real_eig(branch, om, pars)
 
     roots = []
     for i in range(len(omega) - 1):
@@ -229,22 +227,20 @@ def _roots(branch: str, omega: np.ndarray, mre: np.ndarray, pars: np.ndarray) ->
             root, direction = b, (1 if fa > 0 else -1)
         else:
             continue
-        ev = sb.spectrum(branch, [root], pars).eigenvalues[0]
+        ev = stability.spectrum(branch, [root], pars).eigenvalues[0]
         roots.append((float(root), direction, float(abs(ev[0].imag))))
     return roots
 
 
 def find_critical_speeds(branch: str, omega, setup: Setup | None = None,
-                         slip_smoothing: float = 1e-12) -> list[tuple[float, int, float]]:
+                         slip_smoothing: float = SLIP_SMOOTHING) -> list[tuple[float, int, float]]:
     """Critical spin speeds of one branch for one parameter set, searched on the grid ``omega``:
     a list of (Omega_c [rad/s], direction (+1 stabilising, -1 destabilising with increasing Omega),
     |Im s| of the crossing eigenvalue [rad/s])."""
-    from ..solvers.taylor import parameter_values
-
-    st._branch_sign(branch)
+    st.branch_sign(branch)
     omega = _as_axis(omega, "omega")
-    pars = parameter_values(setup or Setup(), fall_angle=0.1, slip_smoothing=slip_smoothing)
-    return _roots(branch, omega, sb.spectrum(branch, omega, pars).max_real_eig, pars)
+    pars = ode.parameter_vector(setup, slip_smoothing=slip_smoothing)
+    return _roots(branch, omega, stability.spectrum(branch, omega, pars).max_real_eig, pars)
 
 
 def critical_speed_curves(ds: xr.Dataset) -> dict[str, xr.DataArray]:

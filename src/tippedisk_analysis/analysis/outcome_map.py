@@ -41,11 +41,14 @@ import math
 import numpy as np
 import xarray as xr
 
+from ..defaults import (BATCH_SIZE, CHUNK_SIZE, FALL_ANGLE, MAP_TOL, OUTCOME_THRESHOLD, OUTCOME_WINDOW_FRACTION,
+                        SLIP_SMOOTHING)
 from ..errors import ParameterError
 from ..models import ode
 from ..parameters import Disk, Friction, InitialState, Setup, to_dict
 from ..ranges import parse_range
 from ..results import describe, make_attrs
+from . import sweeps
 
 MODEL = "ode-euler"
 OUTCOMES = {"not_inverted": 0, "inverted": 1, "fell": 2, "undecided": 3, "failed": 4, "rolling": 5}
@@ -69,12 +72,12 @@ class MapConfig:
     ranges: dict  # swept name -> [start, stop, n], in the order of SWEEPABLE
     t_end: float = 5.0
     window: float | None = None  # default 0.2 t_end
-    threshold: float = 0.9
-    tol: float = 1e-10
-    fall_angle: float = 0.1
-    slip_smoothing: float = 1e-12
-    chunk_size: int = 128
-    batch_size: int = 4  # SIMD lanes; 4 measured ~1.5x faster per run than recommended_simd_size() = 8
+    threshold: float = OUTCOME_THRESHOLD
+    tol: float = MAP_TOL
+    fall_angle: float = FALL_ANGLE
+    slip_smoothing: float = SLIP_SMOOTHING
+    chunk_size: int = CHUNK_SIZE
+    batch_size: int = BATCH_SIZE  # SIMD lanes
     setup: dict = dataclasses.field(default_factory=lambda: to_dict(Setup()))
 
     def __post_init__(self):
@@ -90,7 +93,7 @@ class MapConfig:
         object.__setattr__(self, "ranges", ordered)
         if not (math.isfinite(self.t_end) and self.t_end > 0):
             raise ParameterError(f"t_end = {self.t_end!r} s must be positive; give t_end > 0")
-        window = 0.2 * self.t_end if self.window is None else float(self.window)
+        window = OUTCOME_WINDOW_FRACTION * self.t_end if self.window is None else float(self.window)
         if not (0 < window <= self.t_end):
             raise ParameterError(f"window = {window!r} s must lie in (0, t_end]; give e.g. 0.2 t_end")
         object.__setattr__(self, "window", window)
@@ -181,41 +184,25 @@ def _augmented_system():
 @dataclasses.dataclass(frozen=True)
 class BatchKernel:
     integrator: object  # taylor_adaptive_batch template
-    scalar: object  # taylor_adaptive template with the same system and events
     outputs: object  # cfunc of ode.OUTPUT_NAMES over the model state
     batch_size: int
 
 
 @functools.lru_cache(maxsize=4)
 def kernel(tol: float, batch_size: int = 4) -> BatchKernel:
-    """Compiled batch and scalar integrators (cached per process; heyoka also caches on disk)."""
+    """Compiled batch integrator and outputs (cached per process; heyoka also caches on disk)."""
     import heyoka as hy
-
-    from ..solvers import taylor
 
     model, variables, sys, fall, outputs, gamma = _augmented_system()
     B = int(batch_size)
-    setup, init = Setup(), InitialState()
-    x0 = np.append(taylor.initial_vector(model, setup, init), [0.0, 0.0])
-    pars = taylor.parameter_values(setup, 0.1, 1e-12)
+    x0 = np.append(ode.initial_state_vector(model, Setup(), InitialState()), [0.0, 0.0])
+    pars = ode.parameter_vector()
     pos, neg = hy.event_direction.positive, hy.event_direction.negative
     batch = hy.taylor_adaptive_batch(
         sys, np.repeat(x0[:, None], B, axis=1), pars=np.repeat(pars[:, None], B, axis=1), tol=tol,
         t_events=[hy.t_event_batch(fall, direction=neg)],
         nt_events=[hy.nt_event_batch(gamma, _InversionRecorder(), direction=pos)])
-    scalar = hy.taylor_adaptive(
-        sys, x0, pars=pars, tol=tol, t_events=[hy.t_event(fall, direction=neg)],
-        nt_events=[hy.nt_event(gamma, _ScalarInversion(), direction=pos)])
-    return BatchKernel(batch, scalar, hy.cfunc(outputs, variables), B)
-
-
-class _ScalarInversion:
-    def __init__(self):
-        self.first = FILL_TIME
-
-    def __call__(self, ta, time, d_sign):
-        if self.first == FILL_TIME:
-            self.first = time
+    return BatchKernel(batch, hy.cfunc(outputs, variables), B)
 
 
 RESULT_VARIABLES = {
@@ -243,13 +230,11 @@ def _prepare(config: MapConfig, start: int, stop: int):
     (their values were validated by MapConfig); the initial state depends on (Omega, dgamma0)
     only and is computed once per distinct pair.
     """
-    from ..solvers import taylor
-
     base = config.base_setup()
     pts = config.points(start, stop)
     n = stop - start
     model = ode.EULER
-    pars = np.repeat(taylor.parameter_values(base, config.fall_angle, config.slip_smoothing)[:, None], n, axis=1)
+    pars = np.repeat(ode.parameter_vector(base, config.fall_angle, config.slip_smoothing)[:, None], n, axis=1)
     for name in ("mu", "eps", "e"):
         if name in pts:
             pars[ode.PARAMETER_NAMES.index(name)] = pts[name]
@@ -259,7 +244,7 @@ def _prepare(config: MapConfig, start: int, stop: int):
         key = tuple(float(pts[k][i]) for k in ("omega", "dgamma0") if k in pts)
         if key not in cache:
             _, init = _point_setup(base, {k: pts[k][i] for k in ("omega", "dgamma0") if k in pts})
-            cache[key] = np.append(taylor.initial_vector(model, base, init), [0.0, 0.0])
+            cache[key] = np.append(ode.initial_state_vector(model, base, init), [0.0, 0.0])
         x0[:, i] = cache[key]
     return x0, pars
 
@@ -398,44 +383,6 @@ def _run_batch(ta, x0: np.ndarray, pars: np.ndarray, config: MapConfig) -> dict:
             "gamma_window": gamma_window, "fell": fell, "failed": failed, "inversion_time": rec.first.copy()}
 
 
-def run_chunk_scalar(config: MapConfig | dict, start: int, stop: int) -> dict:
-    """The same as :func:`run_chunk`, one run at a time with the scalar integrator (reference)."""
-    import heyoka as hy
-
-    if isinstance(config, dict):
-        config = MapConfig.from_dict(config)
-    k = kernel(float(config.tol), int(config.batch_size))
-    x0, pars = _prepare(config, start, stop)
-    n = stop - start
-    n_state = x0.shape[0] - 2
-    i_gamma = ode.EULER.state_names.index("gamma")
-    raw = {"final_state": np.empty_like(x0), "t_final": np.empty(n), "t_window": np.zeros(n),
-           "q_window": np.zeros((2, n)), "gamma_window": x0[i_gamma].copy(), "fell": np.zeros(n, bool),
-           "failed": np.zeros(n, bool), "inversion_time": np.full(n, FILL_TIME)}
-    t_w = config.t_end - config.window
-    ta = copy.copy(k.scalar)
-    for i in range(n):
-        ta.time = 0.0
-        ta.state[:] = x0[:, i]
-        ta.pars[:] = pars[:, i]
-        ta.reset_cooldowns()
-        rec = ta.nt_events[0].callback
-        rec.first = FILL_TIME
-        for t_target in ((t_w,) if t_w > 0 else ()) + (config.t_end,):
-            oc = ta.propagate_until(t_target)[0]
-            if oc != hy.taylor_outcome.time_limit:
-                raw["fell" if int(oc) == -1 else "failed"][i] = True
-                break
-            if t_target == t_w:
-                raw["q_window"][:, i] = ta.state[n_state:]
-                raw["gamma_window"][i] = ta.state[i_gamma]
-                raw["t_window"][i] = t_w
-        raw["final_state"][:, i] = ta.state
-        raw["t_final"][i] = ta.time
-        raw["inversion_time"][i] = rec.first
-    return _finish(config, k, raw, pars)
-
-
 def assemble(config: MapConfig, results: dict) -> xr.Dataset:
     """Dataset with dims = swept parameters from flat per-point results (C order)."""
     axes = config.axes()
@@ -483,7 +430,12 @@ def outcome_map(ranges: dict, *, output=None, scheduler=None, threads: int | Non
     resumes. ``scheduler``: dask.distributed address (or ``"local:N"``); default: threads.
     Further options: the fields of :class:`MapConfig` (t_end, window, tol, ...).
     """
-    from . import sweeps
-
     config = MapConfig(ranges=dict(ranges), **options)
-    return sweeps.run_sweep(config, output=output, scheduler=scheduler, threads=threads, progress=progress)
+    return sweeps.run_sweep(sweep(config), output=output, scheduler=scheduler, threads=threads, progress=progress)
+
+
+def sweep(config: MapConfig) -> sweeps.Sweep:
+    """The outcome map as a chunked, resumable :class:`.sweeps.Sweep`."""
+    return sweeps.Sweep("outcome map", config.to_dict(), config.n_points, int(config.chunk_size),
+                        tuple(RESULT_VARIABLES), run_chunk, functools.partial(assemble, config),
+                        functools.partial(kernel, float(config.tol), int(config.batch_size)))

@@ -30,7 +30,7 @@ import numpy as np
 import xarray as xr
 
 from ..errors import ParameterError
-from ..solvers.taylor import DEFAULT_TOL
+from ..defaults import FALL_ANGLE, SLIP_SMOOTHING, TAYLOR_TOL
 from ..models import ode
 from ..parameters import InitialState, Setup, to_dict
 from ..results import describe, make_attrs
@@ -158,8 +158,6 @@ def section_integrator(model_name: str, quantity: str, modulo: bool, direction: 
     """heyoka integrator with the fall event (terminal) and the section (non-terminal)."""
     import heyoka as hy
 
-    from ..solvers import taylor
-
     model = ode.MODELS[model_name]
     variables, sys, fall, outputs = ode.system(model)
     q = _quantity_expression(model, variables, outputs, quantity)
@@ -168,9 +166,9 @@ def section_integrator(model_name: str, quantity: str, modulo: bool, direction: 
     hy_dir = {"positive": hy.event_direction.positive, "negative": hy.event_direction.negative,
               "any": hy.event_direction.any}[direction]
     setup, initial = Setup(), InitialState()
-    pars = np.append(taylor.parameter_values(setup, 0.1, 1e-12), 0.0)
+    pars = np.append(ode.parameter_vector(setup), 0.0)
     ta = hy.taylor_adaptive(
-        sys, taylor.initial_vector(model, setup, initial), pars=pars, tol=tol,
+        sys, ode.initial_state_vector(model, setup, initial), pars=pars, tol=tol,
         t_events=[hy.t_event(fall, direction=hy.event_direction.negative)],
         nt_events=[hy.nt_event(g, _Recorder(), direction=hy_dir)],
     )
@@ -190,21 +188,19 @@ class Crossings:
 
 def crossings(section: Section, *, model_name: str = "ode-euler", setup: Setup | None = None,
               initial: InitialState | None = None, t_transient: float = 0.0, t_end: float = 10.0,
-              max_crossings: int | None = None, tol: float = DEFAULT_TOL, fall_angle: float = 0.1,
-              slip_smoothing: float = 1e-12) -> Crossings:
+              max_crossings: int | None = None, tol: float = TAYLOR_TOL, fall_angle: float = FALL_ANGLE,
+              slip_smoothing: float = SLIP_SMOOTHING) -> Crossings:
     """Integrate from the initial state and collect the section crossings (raw arrays)."""
     import heyoka as hy
-
-    from ..solvers import taylor
 
     _check(t_transient, t_end, max_crossings, tol, fall_angle)
     setup, initial = setup or Setup(), initial or InitialState()
     si = section_integrator(model_name, section.quantity, section.modulo, section.direction, float(tol))
     ta = copy.copy(si.integrator)
-    pars = np.append(taylor.parameter_values(setup, fall_angle, slip_smoothing), section.level)
+    pars = np.append(ode.parameter_vector(setup, fall_angle, slip_smoothing), section.level)
     ta.pars[:] = pars
     ta.time = 0.0
-    ta.state[:] = taylor.initial_vector(si.model, setup, initial)
+    ta.state[:] = ode.initial_state_vector(si.model, setup, initial)
     ta.reset_cooldowns()
     rec = ta.nt_events[0].callback
     rec.t_transient, rec.level, rec.modulo = float(t_transient), section.level, section.modulo
@@ -251,7 +247,8 @@ def _check(t_transient, t_end, max_crossings, tol, fall_angle) -> None:
 def poincare_section(section: str | Section = "beta_dot=0", *, direction: str = "positive",
                      model: str = "ode-euler", setup: Setup | None = None, initial: InitialState | None = None,
                      t_transient: float = 0.0, t_end: float = 10.0, max_crossings: int | None = None,
-                     tol: float = DEFAULT_TOL, fall_angle: float = 0.1, slip_smoothing: float = 1e-12) -> xr.Dataset:
+                     tol: float = TAYLOR_TOL, fall_angle: float = FALL_ANGLE,
+                     slip_smoothing: float = SLIP_SMOOTHING) -> xr.Dataset:
     """Poincaré section of one trajectory as a Dataset (dim ``crossing``).
 
     Integrates from ``initial`` (Table 3 by default) until ``t_end`` [s], ``max_crossings``
@@ -270,8 +267,8 @@ def poincare_section(section: str | Section = "beta_dot=0", *, direction: str = 
                    slip_smoothing=slip_smoothing)
     m = ode.MODELS[model_name]
     si = section_integrator(model_name, sec.quantity, sec.modulo, sec.direction, float(tol))
-    pars = taylor.parameter_values(setup, fall_angle, slip_smoothing)
-    outs = taylor.evaluate_outputs(taylor.CompiledModel(m, None, si.outputs), cr.states, pars)
+    pars = ode.parameter_vector(setup, fall_angle, slip_smoothing)
+    outs = taylor.evaluate_outputs(si.outputs, cr.states, pars)
     data = dict(zip(m.state_names, cr.states.T))
     for name, values in zip(ode.OUTPUT_NAMES, outs):
         data.setdefault(name, values)

@@ -1,8 +1,8 @@
 """Exact Jacobian of the reduced system and eigenvalue stability of the spinning solutions.
 
-The Jacobian of the reduced right-hand side (:mod:`.stationary`) is differentiated
-symbolically by heyoka (``hy.diff_tensors``) and compiled once with ``hy.cfunc``; it is
-evaluated in batches: states (7, N), parameters (11, N) or (11,).
+The Jacobian of the reduced right-hand side (:func:`.reduced.jacobian`) is exact (heyoka's
+symbolic differentiation, compiled once) and evaluated in batches: states (7, N), parameters
+(11, N) or (11,).
 
 Zero slip. At the stationary solutions the slip gamma_T1 vanishes. The naive chain rule of
 |gamma_T| = sqrt(gx^2 + gy^2) divides by zero there; the model evaluates |gamma_T| as
@@ -21,7 +21,7 @@ the six *nontrivial* eigenvalues are those of J' (an exact deflation, no toleran
 Perturbations along the family (changing the spin rate) neither grow nor decay.
 
 Classification (``classify``) of the six nontrivial eigenvalues s_k with
-tol = atol + rtol max_k |s_k| (defaults atol = 1e-9 1/s, rtol = 1e-9, far above the
+tol = atol + rtol max_k |s_k| (defaults.EIG_ATOL = 1e-9 1/s, EIG_RTOL = 1e-9, far above the
 round-off of the Jacobian entries, far below physically relevant rates):
 
 * unstable (2): some Re s_k > tol -- linearly unstable, perturbations grow like exp(Re s t);
@@ -33,51 +33,18 @@ round-off of the Jacobian entries, far below physically relevant rates):
 
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass
 
-import heyoka as hy
 import numpy as np
 
+from ..defaults import EIG_ATOL, EIG_RTOL
 from . import stationary as st
+from .reduced import N_STATE, OMEGA_X_INDEX, jacobian
 
-N_STATE = len(st.STATE_NAMES)
 N_EIG = N_STATE - 1  # nontrivial eigenvalues (structural zero of the spin family removed)
-KEEP = [i for i in range(N_STATE) if i != st.OMEGA_X_INDEX]
+KEEP = [i for i in range(N_STATE) if i != OMEGA_X_INDEX]
 
 STABILITY_FLAGS = {"stable": 0, "marginal": 1, "unstable": 2}
-ATOL = 1e-9  # 1/s
-RTOL = 1e-9
-
-
-@functools.lru_cache(maxsize=None)
-def _jacobian_cfunc():
-    red = st.reduced_system()
-    jac = hy.diff_tensors(red.rhs, diff_args=red.variables, diff_order=1).jacobian
-    return hy.cfunc(list(np.asarray(jac).ravel()), red.variables)
-
-
-def jacobian(states, pars) -> np.ndarray:
-    """Exact Jacobian d rhs / d state of the reduced system, shape (N, 7, 7).
-
-    states: (7,) or (7, N) in STATE_NAMES order; pars: (11,) or (11, N), ode.PARAMETER_NAMES order.
-    """
-    x = np.asarray(states, dtype=float)
-    x = x.reshape(N_STATE, -1)
-    out = st.call_batch(_jacobian_cfunc(), x, pars)  # (49, N), row-major J[i, j]
-    return out.T.reshape(-1, N_STATE, N_STATE)
-
-
-def finite_difference_jacobian(state, pars, h: float = 1e-6) -> np.ndarray:
-    """Central differences of the compiled right-hand side (for tests), shape (7, 7)."""
-    x = np.asarray(state, dtype=float).reshape(N_STATE)
-    steps = h * (1.0 + np.abs(x))
-    plus = x[:, None] + np.diag(steps)
-    minus = x[:, None] - np.diag(steps)
-    pars = np.asarray(pars, dtype=float)
-    fp = st.evaluate(plus, pars)["rhs"]
-    fm = st.evaluate(minus, pars)["rhs"]
-    return (fp - fm) / (2 * steps[None, :])
 
 
 @dataclass(frozen=True)
@@ -111,17 +78,17 @@ def eigen(J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     vals, vecs = np.linalg.eig(reduced)
     order = np.argsort(-vals.real, kind="stable")
     vals, vecs = vals[order], vecs[:, order]
-    b = J[st.OMEGA_X_INDEX, KEEP]
+    b = J[OMEGA_X_INDEX, KEEP]
     full = np.zeros((N_STATE, N_EIG), dtype=complex)
     full[KEEP] = vecs
     with np.errstate(divide="ignore", invalid="ignore"):
         c = (b @ vecs) / vals
-    full[st.OMEGA_X_INDEX] = np.where(np.isfinite(c), c, 0.0)
+    full[OMEGA_X_INDEX] = np.where(np.isfinite(c), c, 0.0)
     full /= np.linalg.norm(full, axis=0)
     return vals, full
 
 
-def classify(eigenvalues: np.ndarray, atol: float = ATOL, rtol: float = RTOL):
+def classify(eigenvalues: np.ndarray, atol: float = EIG_ATOL, rtol: float = EIG_RTOL):
     """(stability int8, n_unstable, max_real_eig) of nontrivial eigenvalues (..., 6)."""
     ev = np.asarray(eigenvalues)
     tol = atol + rtol * np.max(np.abs(ev), axis=-1)

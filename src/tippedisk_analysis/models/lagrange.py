@@ -17,7 +17,6 @@ import numpy as np
 
 from .. import kinematics as kin
 from ..parameters import Setup
-from .moreau_terms import jdot_rates
 
 
 def _skew(a):
@@ -46,8 +45,7 @@ class LagrangeModel:
         A = np.zeros((6, 6))
         A[:3, :3] = np.eye(3)
         A[3:, 3:] = J_R
-        J_R_dot_phid = np.empty(3)  # d/dt(J_R) phi_d
-        jdot_rates(beta, gamma, ad, bd, gd, J_R_dot_phid)
+        J_R_dot_phid = np.array(kin.omega_derivative_entries_at_fixed_rates(beta, gamma, ad, bd, gd))  # d/dt(J_R) phi_d
 
         r_GS_B = np.array([e, 0.0, 0.0])
         r_GS_I = R @ r_GS_B

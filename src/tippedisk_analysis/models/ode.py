@@ -33,8 +33,11 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import heyoka as hy
+import numpy as np
 
 from .. import kinematics as kin
+from ..defaults import FALL_ANGLE, SLIP_SMOOTHING
+from ..parameters import InitialState, Setup
 
 # Runtime parameters hy.par[i]: one compiled integrator serves every value.
 PARAMETER_NAMES = ("m", "e", "r", "A", "B", "C", "gravity", "mu", "eps", "slip_smoothing", "fall_angle")
@@ -112,13 +115,13 @@ def contact_dynamics(trig: Trig, r_OG, v_G, omega) -> ContactDynamics:
     theta_S = [P["A"], P["B"] - m * e * e, P["C"] - m * e * e]
     sb, cb = trig.sb, trig.cb
     ez_I = [0.0, sb, cb]
-    W = trig.G_from_B(omega)  # Omega
+    Omega_G = trig.G_from_B(omega)  # angular velocity in G-components
     v = trig.G_from_I(v_G)
     r_GS = [e * trig.cg, e * trig.sg, 0.0]
     r_SC = [-r_GS[0], -r - r_GS[1], 0.0]  # r_GC1 = -r e_y^G (2.10)
 
     # contact velocity (2.13): v_C = v_G + Omega x r_GC1; slip = its horizontal part (2.15)
-    v_C = [v[0] + r * W[2], v[1], v[2] - r * W[0]]
+    v_C = [v[0] + r * Omega_G[2], v[1], v[2] - r * Omega_G[0]]
     gamma_N = _dot(v_C, ez_I)  # (2.14)
     slip = [v_C[i] - gamma_N * ez_I[i] for i in range(3)]
     slip_squared = _dot(v_C, v_C) - gamma_N * gamma_N
@@ -134,17 +137,17 @@ def contact_dynamics(trig: Trig, r_OG, v_G, omega) -> ContactDynamics:
     psi0_G, psi1_G = trig.G_from_B(psi0), trig.G_from_B(psi1)
 
     # a_G = aG0 + lambda_N aG1: Newton about S and the rigid body formula
-    centripetal = _cross(W, _cross(W, r_GS))
+    centripetal = _cross(Omega_G, _cross(Omega_G, r_GS))
     turn0, turn1 = _cross(psi0_G, r_GS), _cross(psi1_G, r_GS)
     aG0 = [-g * ez_I[i] - turn0[i] - centripetal[i] for i in range(3)]
     aG1 = [n[i] / m - turn1[i] for i in range(3)]
 
     # Euler rates (3.8) in G: beta_d = W_x, alpha_d sin(beta) = W_y, gamma_d = omega_z - cos(beta) alpha_d
-    alpha_d = W[1] / sb
-    beta_d = W[0]
+    alpha_d = Omega_G[1] / sb
+    beta_d = Omega_G[0]
     gamma_d = omega[2] - cb * alpha_d
     # beta_dd = d/dt(cos(gamma) omega_x - sin(gamma) omega_y) = (A_GB Psi)_x - gamma_d W_y
-    beta_dd0, beta_dd1 = psi0_G[0] - gamma_d * W[1], psi1_G[0]
+    beta_dd0, beta_dd1 = psi0_G[0] - gamma_d * Omega_G[1], psi1_G[0]
     # constraint (4.9): e_z^I . a_G = r (cos(beta) beta_dd - sin(beta) beta_d^2)
     lambda_N = (r * (cb * beta_dd0 - sb * beta_d * beta_d) - _dot(aG0, ez_I)) / (_dot(aG1, ez_I) - r * cb * beta_dd1)
 
@@ -152,7 +155,7 @@ def contact_dynamics(trig: Trig, r_OG, v_G, omega) -> ContactDynamics:
     psi = [psi0[i] + lambda_N * psi1[i] for i in range(3)]
     slip_I = trig.I_from_G(slip)[:2]
 
-    v_S = [v[i] + c for i, c in enumerate(_cross(W, r_GS))]
+    v_S = [v[i] + c for i, c in enumerate(_cross(Omega_G, r_GS))]
     z_S = r_OG[2] + e * sb * trig.sg
     return ContactDynamics(
         a_G=a_G,
@@ -240,3 +243,23 @@ OUTPUT_NAMES = ("alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot", 
                 "lambda_N", "slip_x", "slip_y", "E_kin", "E_pot", "P_friction")
 
 MODELS = {m.name: m for m in (EULER, QUATERNION)}
+
+
+def parameter_vector(setup: Setup | None = None, fall_angle: float = FALL_ANGLE,
+                     slip_smoothing: float = SLIP_SMOOTHING) -> np.ndarray:
+    """Runtime parameters hy.par[i] in the order of PARAMETER_NAMES (default: Tables 1-2, Sect. 6)."""
+    setup = setup or Setup()
+    d, f = setup.disk, setup.friction
+    values = {"m": d.m, "e": d.e, "r": d.r, "A": d.A, "B": d.B, "C": d.C, "gravity": setup.gravity,
+              "mu": f.mu, "eps": f.eps, "slip_smoothing": slip_smoothing, "fall_angle": fall_angle}
+    return np.array([values[name] for name in PARAMETER_NAMES])
+
+
+def initial_state_vector(model: OdeModel, setup: Setup, initial: InitialState) -> np.ndarray:
+    """State vector of ``model``: closed contact at C1 without slip (6.2), W_friction = 0."""
+    rest = kin.rest_contact_state(setup.disk.r, initial.euler, initial.euler_rates)
+    if model is EULER:
+        orientation = initial.euler
+    else:
+        orientation = kin.quaternion_from_rotation(kin.rotation_from_euler(*initial.euler))
+    return np.array([initial.x, initial.y, rest["z"], *orientation, *rest["v_G"], *rest["omega"], 0.0])

@@ -18,6 +18,7 @@ import xarray as xr
 
 from ..errors import ParameterError, UnknownModelError
 from ..parameters import InitialState, Setup
+from . import moreau
 
 
 @dataclass(frozen=True)
@@ -76,14 +77,6 @@ def simulate(model: str = "ode-euler", t_end: float = 5.0, *, setup: Setup | Non
     _check_positive(options, ("dt_output", "tol", "slip_smoothing", "dt"))
     if "tol" in options and not options["tol"] < 1:
         raise ParameterError(f"tol = {options['tol']!r} must lie in (0, 1); give e.g. 1e-14 (ODE) or 1e-8 (Moreau)")
-    if "fall_angle" in options:
-        # the Euler-angle models need a fall angle > 0 (sin beta = 0 is their singularity);
-        # the quaternion Moreau models may switch the fall check off with 0
-        lowest = 0.0 if info.name.startswith("moreau-") and info.name.endswith("quaternion") else None
-        value = options["fall_angle"]
-        if not (isinstance(value, int | float) and (value > 0 or value == lowest) and value < math.pi / 2):
-            closed = "[0, pi/2)" if lowest == 0.0 else "(0, pi/2)"
-            raise ParameterError(f"fall_angle = {value!r} must lie in {closed} rad for {info.name}; give e.g. 0.1")
     return info.run(setup or Setup(), initial or InitialState(), float(t_end), **options)
 
 
@@ -113,19 +106,11 @@ register(ModelInfo("ode-quaternion", "ODE Model 2", "quaternions, bilateral cont
 
 def _run_moreau(model_name: str):
     def run(setup, initial, t_end, **options):
-        from . import moreau  # numba compiles (or loads its cache) on first use only
-
-        return moreau.run(model_name, setup, initial, t_end, **options)
+        return moreau.run(model_name, setup, initial, t_end, **options)  # numba loads on first use
 
     return run
 
 
-def _register_moreau() -> None:
-    from .moreau import MODELS, OPTIONS
-
-    for name, model in MODELS.items():
-        register(ModelInfo(name, model.paper_name, model.description, (f"m{model.number}",),
-                           _run_moreau(name), OPTIONS))
-
-
-_register_moreau()
+for _name, _model in moreau.MODELS.items():
+    register(ModelInfo(_name, _model.paper_name, _model.description, (f"m{_model.number}",), _run_moreau(_name),
+                       moreau.OPTIONS))

@@ -16,17 +16,14 @@ import heyoka as hy
 import numpy as np
 import xarray as xr
 
-from .. import kinematics as kin
+from ..defaults import FALL_ANGLE, SLIP_SMOOTHING, TAYLOR_TOL
+from ..errors import IntegrationError, ParameterError
 from ..models import ode
-from ..errors import IntegrationError
 from ..parameters import InitialState, Setup, to_dict
 from ..results import describe, flat_parameters, make_attrs
 
 if hasattr(hy.llvm_state, "set_diskcache_enabled"):  # heyoka >= 7.10: compiled code persists across processes
     hy.llvm_state.set_diskcache_enabled(True)
-
-
-DEFAULT_TOL = 1e-14  # Taylor order 18: 1e-12 m constraint, 1e-9 J energy balance; compiles in < 5 s
 
 
 @dataclass(frozen=True)
@@ -44,30 +41,12 @@ def compiled(model_name: str, tol: float) -> CompiledModel:
     setup, initial = Setup(), InitialState()  # placeholders; every run sets its own
     integrator = hy.taylor_adaptive(
         sys,
-        initial_vector(model, setup, initial),
-        pars=parameter_values(setup, fall_angle=0.1, slip_smoothing=1e-12),
+        ode.initial_state_vector(model, setup, initial),
+        pars=ode.parameter_vector(setup),
         tol=tol,
         t_events=[hy.t_event(fall, direction=hy.event_direction.negative)],
     )
     return CompiledModel(model, integrator, hy.cfunc(outputs, variables))
-
-
-def parameter_values(setup: Setup, fall_angle: float, slip_smoothing: float) -> np.ndarray:
-    """Runtime parameter vector in the order of ode.PARAMETER_NAMES."""
-    d, f = setup.disk, setup.friction
-    values = {"m": d.m, "e": d.e, "r": d.r, "A": d.A, "B": d.B, "C": d.C, "gravity": setup.gravity,
-              "mu": f.mu, "eps": f.eps, "slip_smoothing": slip_smoothing, "fall_angle": fall_angle}
-    return np.array([values[name] for name in ode.PARAMETER_NAMES])
-
-
-def initial_vector(model: ode.OdeModel, setup: Setup, initial: InitialState) -> np.ndarray:
-    """State vector: closed contact at C1 without slip (6.2)."""
-    rest = kin.rest_contact_state(setup.disk.r, initial.euler, initial.euler_rates)
-    if model is ode.EULER:
-        orientation = initial.euler
-    else:
-        orientation = kin.quaternion_from_rotation(kin.rotation_from_euler(*initial.euler))
-    return np.array([initial.x, initial.y, rest["z"], *orientation, *rest["v_G"], *rest["omega"], 0.0])
 
 
 @dataclass
@@ -87,10 +66,10 @@ def integrate(model_name: str, setup: Setup, initial: InitialState, t_end: float
               tol: float, fall_angle: float, slip_smoothing: float) -> Trajectory:
     cm = compiled(model_name, tol)
     ta = copy.copy(cm.integrator)
-    pars = parameter_values(setup, fall_angle, slip_smoothing)
+    pars = ode.parameter_vector(setup, fall_angle, slip_smoothing)
     ta.pars[:] = pars
     ta.time = 0.0
-    ta.state[:] = initial_vector(cm.model, setup, initial)
+    ta.state[:] = ode.initial_state_vector(cm.model, setup, initial)
     ta.reset_cooldowns()
 
     grid = output_grid(t_end, dt_output)
@@ -101,7 +80,7 @@ def integrate(model_name: str, setup: Setup, initial: InitialState, t_end: float
     if int(outcome) == -1:  # terminal event 0: the disk fell; keep the state at the event
         states = np.vstack([states, ta.state[None, :]])
         time = np.append(time, ta.time)
-    outputs = evaluate_outputs(cm, states, pars)
+    outputs = evaluate_outputs(cm.outputs, states, pars)
     finite = np.all(np.isfinite(states), axis=1) & np.all(np.isfinite(outputs), axis=0)
     if outcome == hy.taylor_outcome.err_nf_state or not finite.all():
         keep = len(finite) if finite.all() else int(np.argmin(finite))
@@ -119,13 +98,13 @@ def integrate(model_name: str, setup: Setup, initial: InitialState, t_end: float
     return Trajectory(time, states, outputs, status, message, int(n_steps), float(ta.time))
 
 
-def evaluate_outputs(cm: CompiledModel, states: np.ndarray, pars: np.ndarray) -> np.ndarray:
-    """Outputs of ode.OUTPUT_NAMES at each row of ``states`` (batched compiled function)."""
+def evaluate_outputs(outputs, states: np.ndarray, pars: np.ndarray) -> np.ndarray:
+    """Outputs of ode.OUTPUT_NAMES (compiled function ``outputs``) at each row of ``states``, shape (15, n)."""
     n = len(states)
     if n == 0:
         return np.empty((len(ode.OUTPUT_NAMES), 0))
-    par_block = np.repeat(pars[: cm.outputs.nparams, None], n, axis=1)
-    return cm.outputs(np.ascontiguousarray(states.T), pars=par_block)
+    par_block = np.repeat(pars[: outputs.nparams, None], n, axis=1)
+    return outputs(np.ascontiguousarray(states.T), pars=par_block)
 
 
 def output_grid(t_end: float, dt_output: float) -> np.ndarray:
@@ -138,8 +117,11 @@ def output_grid(t_end: float, dt_output: float) -> np.ndarray:
 
 
 def run(model_name: str, setup: Setup, initial: InitialState, t_end: float, *, dt_output: float = 1e-3,
-        tol: float = DEFAULT_TOL, fall_angle: float = 0.1, slip_smoothing: float = 1e-12) -> xr.Dataset:
+        tol: float = TAYLOR_TOL, fall_angle: float = FALL_ANGLE, slip_smoothing: float = SLIP_SMOOTHING) -> xr.Dataset:
     """Integrate an ODE model and return the labelled dataset (schema of results.py)."""
+    if not (isinstance(fall_angle, int | float) and 0 < fall_angle < math.pi / 2):
+        raise ParameterError(f"fall_angle = {fall_angle!r} rad must lie in (0, pi/2) for {model_name} (sin beta = 0 "
+                             f"is the Euler-angle singularity); give e.g. {FALL_ANGLE:g}")
     traj = integrate(model_name, setup, initial, t_end, dt_output, tol, fall_angle, slip_smoothing)
     model = ode.MODELS[model_name]
     data = dict(zip(model.state_names, traj.states.T))

@@ -33,18 +33,20 @@ def save(fig, path: Path) -> None:
 
 
 def window_mean(ds, name: str, t0: float, t1: float) -> float:
+    """Mean of ``name`` over [t0, t1] s (clipped to the run: quick runs are shorter)."""
+    t0 = min(t0, 0.2 * float(ds.time[-1]))
     sel = (ds.time >= t0) & (ds.time <= t1)
     return float(np.mean(ds[name].values[sel.values]))
 
 
-def model_pair(out: Path, euler: str, quaternion: str, figure_numbers: tuple[int, int]):
-    """Run an Euler/quaternion pair of Moreau models for 5 s (the quaternion one with and without
+def model_pair(out: Path, euler: str, quaternion: str, figure_numbers: tuple[int, int], t_end: float = 5.0):
+    """Run an Euler/quaternion pair of Moreau models for t_end (the quaternion one with and without
     normalisation), draw the first as the paper's simulation figure and the gaps of all three.
     Returns the three datasets (Euler, quaternion, quaternion normalised)."""
     from tippedisk_analysis import plotting
 
-    e, q = run(out, euler, 5.0), run(out, quaternion, 5.0)
-    qn = run(out, quaternion, 5.0, normalize_quaternion=True, tag="normalized")
+    e, q = run(out, euler, t_end), run(out, quaternion, t_end)
+    qn = run(out, quaternion, t_end, normalize_quaternion=True, tag="normalized")
     ne, nq = e.attrs["paper_model"], q.attrs["paper_model"]
     save(plotting.simulation_figure(e), out / f"fig{figure_numbers[0]:02d}_model{ne.split()[-1]}.png")
     save(plotting.gap_figure({f"{ne} (E)": e, f"{nq} (Q)": q, f"{nq} (Q, normalised)": qn}),

@@ -1,0 +1,167 @@
+"""The symmetry-reduced system of ODE Model 1: its right-hand side and exact derivatives.
+
+The ODE Model 1 state (Sect. 4.1, :mod:`tippedisk_analysis.models.ode`) is
+(x, y, z, alpha, beta, gamma, x_dot, y_dot, z_dot, omega_x, omega_y, omega_z, W_friction).
+Its right-hand side does not depend on x, y (horizontal translation), alpha (rotation of
+the whole motion about e_z^I, (3.1)) nor W_friction (an integral of the friction power),
+so a spinning disk with alpha_dot = Omega is a *relative* equilibrium: alpha grows and
+v_G turns with the disk. The reduction used here:
+
+* drop x, y, alpha (cyclic) and W_friction (a quadrature);
+* z = r sin(beta) and z_dot = r cos(beta) beta_dot: the bilateral constraint g_N1 = 0
+  (2.12) and its derivative, which the acceleration-level constraint (4.9) keeps invariant;
+* express the horizontal velocity of G in the R-frame, I turned by alpha about e_z^I (3.1):
+  u = (e_x^R . v_G, e_y^R . v_G), i.e. u_x = cos(alpha) x_dot + sin(alpha) y_dot,
+  u_y = -sin(alpha) x_dot + cos(alpha) y_dot. Differentiating in the turning frame,
+  u_x_dot = a_x^R + alpha_dot u_y and u_y_dot = a_y^R - alpha_dot u_x.
+
+Reduced state (STATE_NAMES): (beta, gamma, u_x, u_y, omega_x, omega_y, omega_z), seven
+first-order equations. The right-hand side is *not* a second copy of the physics: it is
+:func:`tippedisk_analysis.models.ode.system` for ODE Model 1 with alpha = 0 substituted
+(where the R-frame and the I-frame coincide, so a_G in I equals a_G in R), x_dot -> u_x,
+y_dot -> u_y, z -> r sin(beta), z_dot -> r cos(beta) beta_dot, plus the turning-frame terms
+above; beta_dot, gamma_dot and alpha_dot are the inverse of (3.3) from the same module.
+
+Derivatives are exact: heyoka differentiates the expressions symbolically (``hy.diff_tensors``)
+and compiles them once per process (``hy.cfunc``, cached on disk by heyoka): the Jacobian for
+stability (:mod:`.stability`), and the tensors up to third order, including derivatives with
+respect to the runtime parameters, for continuation and normal forms (:mod:`.continuation`).
+Every function evaluates in batches: states (7, N), parameters (11,) or (11, N) in the order of
+:data:`tippedisk_analysis.models.ode.PARAMETER_NAMES` (:func:`tippedisk_analysis.models.ode.parameter_vector`).
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+import heyoka as hy
+import numpy as np
+
+from .. import kinematics as kin
+from ..models import ode
+
+STATE_NAMES = ("beta", "gamma", "u_x", "u_y", "omega_x", "omega_y", "omega_z")
+N_STATE = len(STATE_NAMES)
+OMEGA_X_INDEX = STATE_NAMES.index("omega_x")  # the direction of the spin family (stationary.stationary_state)
+
+
+@dataclass(frozen=True)
+class ReducedSystem:
+    """Heyoka expressions of the reduced dynamics (module docstring)."""
+
+    variables: list  # heyoka variables, STATE_NAMES order
+    rhs: list  # d/dt of the variables
+    alpha_dot: object  # spin rate about e_z^I (inverse of (3.3)) [rad/s]
+    lambda_N: object  # normal force at C1 [N]
+    slip: list  # gamma_T1 in the R-frame [m/s]
+
+
+@functools.lru_cache(maxsize=None)
+def reduced_system() -> ReducedSystem:
+    """Build the reduced right-hand side from ODE Model 1's expressions (alpha = 0 substituted)."""
+    full_vars, sys, _fall, outputs = ode.system(ode.EULER)
+    names = ode.EULER.state_names
+    rhs_full = dict(zip(names, (rhs for _var, rhs in sys)))
+    out = dict(zip(ode.OUTPUT_NAMES, outputs))
+    beta, gamma, u_x, u_y, w_x, w_y, w_z = variables = hy.make_vars(*STATE_NAMES)
+    r = ode.P["r"]
+    _alpha_dot, beta_dot, _gamma_dot = kin.euler_rate_entries_from_omega(beta, gamma, w_x, w_y, w_z, xp=hy)
+    subs = {
+        "x": hy.expression(0.0), "y": hy.expression(0.0), "alpha": hy.expression(0.0),  # cyclic
+        "z": r * hy.sin(beta),  # g_N1 = 0 (2.12)
+        "z_dot": r * hy.cos(beta) * beta_dot,  # g_N1_dot = 0
+        "x_dot": u_x, "y_dot": u_y,  # alpha = 0: R-frame = I-frame
+        "W_friction": hy.expression(0.0),
+    }
+
+    def reduce(expr):
+        return hy.subs(expr, subs)
+
+    alpha_dot = reduce(rhs_full["alpha"])
+    rhs = [
+        reduce(rhs_full["beta"]),
+        reduce(rhs_full["gamma"]),
+        reduce(rhs_full["x_dot"]) + alpha_dot * u_y,  # d/dt (e_x^R . v_G)
+        reduce(rhs_full["y_dot"]) - alpha_dot * u_x,  # d/dt (e_y^R . v_G)
+        reduce(rhs_full["omega_x"]),
+        reduce(rhs_full["omega_y"]),
+        reduce(rhs_full["omega_z"]),
+    ]
+    return ReducedSystem(list(variables), rhs, alpha_dot, reduce(out["lambda_N"]),
+                         [reduce(out["slip_x"]), reduce(out["slip_y"])])
+
+
+@functools.lru_cache(maxsize=None)
+def _rhs_cfunc():
+    red = reduced_system()
+    return hy.cfunc([*red.rhs, red.alpha_dot, red.lambda_N, *red.slip], red.variables)
+
+
+def _pars_block(pars: np.ndarray, n: int, nparams: int) -> np.ndarray:
+    pars = np.asarray(pars, dtype=float)
+    if pars.ndim == 1:
+        pars = np.repeat(pars[:, None], n, axis=1)
+    return np.ascontiguousarray(pars[:nparams])
+
+
+def call_batch(cf, states: np.ndarray, pars) -> np.ndarray:
+    """Evaluate a heyoka cfunc on states (nvars, N) with pars (npars,) or (npars, N)."""
+    states = np.ascontiguousarray(states, dtype=float)
+    if cf.nparams == 0:
+        return cf(states)
+    return cf(states, pars=_pars_block(pars, states.shape[1], cf.nparams))
+
+
+def evaluate(states, pars) -> dict[str, np.ndarray]:
+    """Reduced right-hand side and diagnostics in a batch.
+
+    states: shape (7,) or (7, N) in STATE_NAMES order; pars: (11,) or (11, N)
+    (ode.PARAMETER_NAMES order, see :func:`parameter_vector`). Returns ``rhs`` (7, N),
+    ``alpha_dot``, ``lambda_N`` [N] and ``slip`` (2, N) [m/s].
+    """
+    cf = _rhs_cfunc()
+    x = np.atleast_2d(np.asarray(states, dtype=float).T).T
+    x = np.ascontiguousarray(x.reshape(N_STATE, -1))
+    out = call_batch(cf, x, pars)
+    return {"rhs": out[:7], "alpha_dot": out[7], "lambda_N": out[8], "slip": out[9:11]}
+
+
+@functools.lru_cache(maxsize=None)
+def _jacobian_cfunc():
+    red = reduced_system()
+    jac = hy.diff_tensors(red.rhs, diff_args=red.variables, diff_order=1).jacobian
+    return hy.cfunc(list(np.asarray(jac).ravel()), red.variables)
+
+
+def jacobian(states, pars) -> np.ndarray:
+    """Exact Jacobian d rhs / d state of the reduced system, shape (N, 7, 7).
+
+    states: (7,) or (7, N) in STATE_NAMES order; pars: (11,) or (11, N), ode.PARAMETER_NAMES order.
+    """
+    x = np.asarray(states, dtype=float).reshape(N_STATE, -1)
+    out = call_batch(_jacobian_cfunc(), x, pars)  # (49, N), row-major J[i, j]
+    return out.T.reshape(-1, N_STATE, N_STATE)
+
+
+@functools.lru_cache(maxsize=None)
+def _alpha_dot_grad_cfunc():
+    red = reduced_system()
+    grad = hy.diff_tensors([red.alpha_dot], diff_args=red.variables, diff_order=1).jacobian
+    return hy.cfunc(list(np.asarray(grad).ravel()), red.variables)
+
+
+def alpha_dot_gradient(x, pars) -> np.ndarray:
+    cf = _alpha_dot_grad_cfunc()
+    return call_batch(cf, np.asarray(x, dtype=float).reshape(-1, 1), pars)[:, 0]
+
+
+def reduced_from_full(alpha, beta, gamma, x_dot, y_dot, omega_x, omega_y, omega_z) -> np.ndarray:
+    """Reduced states (7, N) from ODE Model 1 states (e.g. a simulation dataset's variables):
+    u = (e_x^R . v_G, e_y^R . v_G) with the R-frame turned by alpha about e_z^I (3.1)."""
+    alpha = np.asarray(alpha, dtype=float)
+    ca, sa = np.cos(alpha), np.sin(alpha)
+    u_x = ca * np.asarray(x_dot) + sa * np.asarray(y_dot)
+    u_y = -sa * np.asarray(x_dot) + ca * np.asarray(y_dot)
+    return np.atleast_2d(np.array([beta, gamma, u_x, u_y, omega_x, omega_y, omega_z], dtype=float).T).T.reshape(
+        len(STATE_NAMES), -1)

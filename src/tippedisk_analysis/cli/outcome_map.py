@@ -1,0 +1,44 @@
+"""``tippedisk outcome-map``: classify runs over a grid of (Omega, eps[, mu, e, dgamma0]); resumable."""
+
+from __future__ import annotations
+
+from .. import defaults
+from .common import finite_float, positive_int, range_type, writable
+from .registry import command
+
+
+def _arguments(p) -> None:
+    p.add_argument("--omega", type=range_type("omega"), required=True, help="START:STOP:N initial spin Omega "
+                   "[rad/s] (N values, ends included; write --omega=-50:-10:5 for a negative START)")
+    p.add_argument("--eps", type=range_type("eps"), required=True, help="START:STOP:N smoothing velocity eps [m/s]")
+    p.add_argument("--mu", type=range_type("mu"), help="START:STOP:N friction coefficient (default 0.3)")
+    p.add_argument("--e", type=range_type("e"), help="START:STOP:N eccentricity [m] (default 2.5e-3; A, B, C "
+                                                    "about G held fixed)")
+    p.add_argument("--dgamma0", type=range_type("dgamma0"), help="START:STOP:N gamma(0) + pi/2 [rad] (default 0.1)")
+    p.add_argument("--t-end", type=finite_float, default=5.0, help="length of each run [s] (default 5)")
+    p.add_argument("--window", type=finite_float, help="classification window at the end [s] "
+                   f"(default {defaults.OUTCOME_WINDOW_FRACTION:g} t_end)")
+    p.add_argument("--tol", type=finite_float, default=defaults.MAP_TOL,
+                   help=f"integrator tolerance (default {defaults.MAP_TOL:g})")
+    p.add_argument("--fall-angle", type=finite_float, default=defaults.FALL_ANGLE,
+                   help=f"tilt that ends a run [rad] (default {defaults.FALL_ANGLE:g})")
+    p.add_argument("--chunk-size", type=positive_int, default=defaults.CHUNK_SIZE,
+                   help=f"grid points per chunk (default {defaults.CHUNK_SIZE})")
+    p.add_argument("--batch-size", type=positive_int, default=defaults.BATCH_SIZE,
+                   help=f"SIMD lanes per batch: 1, 2, 4, 8, 16 (default {defaults.BATCH_SIZE})")
+    p.add_argument("--threads", type=positive_int, help="threads without --scheduler (default: cores)")
+    p.add_argument("--scheduler", help="dask.distributed scheduler address, or local:N for a local cluster")
+    p.add_argument("--output", "-o", required=True, help="netCDF file (chunks go to OUTPUT.chunks/)")
+
+
+@command("outcome-map", "classify runs over a grid of (Omega, eps, ...) -> netCDF", _arguments)
+def outcome_map(args) -> int:
+    from ..analysis.outcome_map import outcome_map as run_map
+
+    ranges = {k: getattr(args, k) for k in ("omega", "eps", "mu", "e", "dgamma0") if getattr(args, k) is not None}
+    output = writable(args.output)
+    ds = run_map(ranges, output=output, scheduler=args.scheduler, threads=args.threads, t_end=args.t_end,
+                 window=args.window, tol=args.tol, fall_angle=args.fall_angle, chunk_size=args.chunk_size,
+                 batch_size=args.batch_size)
+    print(f"{output}: {ds.attrs['message']}")
+    return 0

@@ -1,0 +1,45 @@
+"""``tippedisk study``: run a study of the installed package ``tippedisk_studies`` (the repository's studies/)."""
+
+from __future__ import annotations
+
+import importlib
+import pkgutil
+
+from ..errors import ParameterError
+from .registry import command
+
+STUDIES_PACKAGE = "tippedisk_studies"
+
+
+def names() -> list[str]:
+    """Study names, sorted (modules of tippedisk_studies not starting with an underscore)."""
+    package = importlib.import_module(STUDIES_PACKAGE)
+    return sorted(m.name for m in pkgutil.iter_modules(package.__path__) if not m.name.startswith("_"))
+
+
+def run(name: str, output_dir: str = "output", quick: bool = False):
+    """Run study ``name``; returns what its ``main`` returns."""
+    if name not in names():
+        raise ParameterError(f"unknown study {name!r}; `tippedisk study --list` prints the names")
+    module = importlib.import_module(f"{STUDIES_PACKAGE}.{name}")
+    return module.main(output_dir, quick=quick)
+
+
+def _arguments(p) -> None:
+    p.add_argument("name", nargs="?", help="study name (see --list)")
+    p.add_argument("--list", action="store_true", help="print the study names with their first docstring line")
+    p.add_argument("--output-dir", default="output", help="folder for the datasets and figures (default output/)")
+    p.add_argument("--quick", action="store_true", help="reduced size (seconds): a smoke test of the study")
+
+
+@command("study", "run a study (datasets + figures); --list names them", _arguments)
+def study(args) -> int:
+    if args.list:
+        for name in names():
+            doc = (importlib.import_module(f"{STUDIES_PACKAGE}.{name}").__doc__ or "").strip().splitlines()
+            print(f"{name:<30} {doc[0] if doc else ''}")
+        return 0
+    if not args.name:
+        raise ParameterError("give a study name or --list")
+    run(args.name, args.output_dir, quick=args.quick)
+    return 0

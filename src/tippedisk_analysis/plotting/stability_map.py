@@ -1,0 +1,67 @@
+"""Stability maps of the spinning solutions: growth rate over (Omega, eps), critical speeds, eigenvalues."""
+
+from __future__ import annotations
+
+import matplotlib.pyplot as plt
+import numpy as np
+import xarray as xr
+from matplotlib.colors import SymLogNorm
+
+from ..analysis.maps import critical_speed_curves
+from .registry import figure
+
+
+@figure("stability_map")
+def stability_map_figure(ds: xr.Dataset, eps_index: int | None = None):
+    """Top: max_real_eig over (Omega, eps) per branch, the zero contour and the critical spin
+    speeds Omega_c(eps); bottom: real parts of the eigenvalues against Omega at one eps
+    (by default the eps with the most critical speeds, else the middle of the eps axis). Further swept dims (mu, e)
+    are shown at their first value."""
+    extra = {d: 0 for d in ds["max_real_eig"].dims if d not in ("branch", "omega", "eps")}
+    sub = ds.isel(extra) if extra else ds
+    fixed = ", ".join(f"{d} = {float(sub[d]):g}" for d in extra)
+    curves = critical_speed_curves(sub)
+    omega, eps = sub["omega"].values, sub["eps"].values
+    if eps_index is None:  # the eps with the most critical speeds (else the middle one)
+        counts = sub["n_critical"].sum("branch").values if "n_critical" in sub else np.zeros(len(eps))
+        eps_index = int(np.argmax(counts)) if counts.max() > 0 else len(eps) // 2
+    k = eps_index
+    vmax = float(np.abs(sub["max_real_eig"]).max()) or 1.0
+    norm = SymLogNorm(linthresh=min(0.1, vmax), vmin=-vmax, vmax=vmax)
+    fig, axes = plt.subplots(2, 2, figsize=(11, 8), constrained_layout=True)
+    for j, branch in enumerate(sub["branch"].values):
+        b = sub.sel(branch=branch)
+        ax = axes[0, j]
+        mre = b["max_real_eig"].transpose("eps", "omega").values
+        oc = curves[str(branch)].transpose("eps", "crossing").values
+        if len(omega) > 1 and len(eps) > 1:
+            mesh = ax.pcolormesh(omega, eps, mre, cmap="RdBu_r", norm=norm, shading="nearest")
+            ax.contour(omega, eps, mre, levels=[0.0], colors="k", linewidths=0.8)
+            fig.colorbar(mesh, ax=ax, label=r"max Re $s$ [1/s]")
+            for c in range(oc.shape[1]):
+                ax.plot(oc[:, c], eps, "o", ms=3, color="gold", mec="k", mew=0.4,
+                        label=r"$\Omega_c(\varepsilon)$" if c == 0 else None)
+            ax.axhline(eps[k], color="0.4", ls=":", lw=0.8)
+            ax.set(xlabel=r"spin rate $\Omega$ [rad/s]", ylabel=r"$\varepsilon$ [m/s]",
+                   title=f"{branch}: growth rate (red unstable, blue stable)")
+        else:  # a single eps: the growth rate as a curve (first eps if only one Omega)
+            ax.plot(omega, mre[0], "-", color="k")
+            ax.axhline(0.0, color="0.5", lw=0.8)
+            ax.plot(oc[0], np.zeros_like(oc[0]), "o", color="gold", mec="k", label=r"$\Omega_c$")
+            ax.set_yscale("symlog", linthresh=0.1)
+            ax.set(xlabel=r"spin rate $\Omega$ [rad/s]", ylabel=r"max Re $s$ [1/s]",
+                   title=f"{branch}: growth rate at eps = {eps[0]:g} m/s")
+        if np.isfinite(oc).any():
+            ax.legend(loc="upper right", fontsize=8)
+        ax = axes[1, j]
+        re = b["eig_real"].isel(eps=k).transpose("omega", "eig").values
+        for i in range(re.shape[1]):
+            ax.plot(omega, re[:, i], ".", ms=2)
+        ax.axhline(0.0, color="k", lw=0.8)
+        for oc_k in oc[k][np.isfinite(oc[k])]:
+            ax.axvline(oc_k, color="gold", lw=1.2)
+        ax.set_yscale("symlog", linthresh=0.1)
+        ax.set(xlabel=r"spin rate $\Omega$ [rad/s]", ylabel=r"Re $s_k$ [1/s]",
+               title=f"{branch}: eigenvalue real parts at eps = {eps[k]:g} m/s")
+    fig.suptitle("Stationary spinning solutions, ODE Model 1 reduced" + (f" ({fixed})" if fixed else ""))
+    return fig

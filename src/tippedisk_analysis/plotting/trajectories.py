@@ -1,0 +1,63 @@
+"""Figures of trajectory analyses: Poincaré sections, outcome maps, brute-force bifurcation diagrams."""
+
+from __future__ import annotations
+
+import matplotlib.pyplot as plt
+import xarray as xr
+from matplotlib.colors import BoundaryNorm, ListedColormap
+
+from .registry import figure
+
+
+@figure("poincare")
+def poincare_figure(ds: xr.Dataset):
+    """Crossings of a Poincaré section: (gamma, gamma_dot) and (beta, gamma), coloured by time."""
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4.5), constrained_layout=True)
+    for ax, (x, y) in zip(axes, (("gamma", "gamma_dot"), ("beta", "gamma"))):
+        sc = ax.scatter(ds[x], ds[y], c=ds["time"], s=8, cmap="viridis")
+        ax.set(xlabel=f"{x} [{ds[x].attrs.get('units', '')}]", ylabel=f"{y} [{ds[y].attrs.get('units', '')}]")
+    fig.colorbar(sc, ax=axes, label="time t [s]")
+    fig.suptitle(f"Poincaré section {ds.attrs.get('section', '')} ({ds.attrs.get('direction', '')}): "
+                 f"{ds.attrs.get('n_crossings', 0)} crossings, {ds.attrs.get('status', '')}")
+    return fig
+
+
+@figure("outcome_map")
+def outcome_map_figure(ds: xr.Dataset):
+    """Outcome classes and inversion time over the first two swept parameters."""
+    dims = list(ds["outcome"].dims)
+    sel = {d: 0 for d in dims[2:]}  # further swept parameters: their first value
+    out = ds["outcome"].isel(sel)
+    values = [int(v) for v in ds["outcome"].attrs["flag_values"]]
+    meanings = ds["outcome"].attrs["flag_meanings"].split()
+    palette = {"not_inverted": "tab:blue", "inverted": "tab:green", "fell": "tab:red", "undecided": "tab:gray",
+               "failed": "black", "rolling": "tab:orange"}
+    cmap = ListedColormap([palette.get(m, "tab:purple") for m in meanings])
+    norm = BoundaryNorm([v - 0.5 for v in values] + [values[-1] + 0.5], cmap.N)
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), constrained_layout=True)
+    x, y = dims[0], dims[1]
+    mesh = axes[0].pcolormesh(ds[x], ds[y], out.transpose(y, x), cmap=cmap, norm=norm, shading="nearest")
+    cbar = fig.colorbar(mesh, ax=axes[0], ticks=values)
+    cbar.ax.set_yticklabels(meanings)
+    t_inv = ds["inversion_time"].isel(sel)
+    masked = t_inv.where(t_inv >= 0)  # fill value -1: no inversion (figure only)
+    mesh = axes[1].pcolormesh(ds[x], ds[y], masked.transpose(y, x), shading="nearest", cmap="magma")
+    fig.colorbar(mesh, ax=axes[1], label="inversion time [s] (blank: none)")
+    for ax, title in zip(axes, ("outcome", "first upward crossing of gamma = 0")):
+        ax.set(xlabel=f"{x} [{ds[x].attrs.get('units', '')}]", ylabel=f"{y} [{ds[y].attrs.get('units', '')}]",
+               title=title)
+    extra = ", ".join(f"{d} = {float(ds[d][0]):g}" for d in dims[2:])
+    fig.suptitle(f"Outcome map, {ds.attrs.get('paper_model', '')}, runs of {ds.attrs.get('t_end', '')} s"
+                 + (f" ({extra})" if extra else ""))
+    return fig
+
+
+@figure("bifurcation")
+def bifurcation_figure(ds: xr.Dataset):
+    """Brute-force bifurcation diagram: the recorded quantity at the crossings against Omega."""
+    fig, ax = plt.subplots(figsize=(8, 5), constrained_layout=True)
+    ax.plot(ds["omega_of_point"], ds["value"], ".", color="k", markersize=2, linestyle="none")
+    ax.set(xlabel=r"initial spin $\Omega$ [rad/s]",
+           ylabel=f"{ds.attrs.get('quantity', '')} [{ds['value'].attrs.get('units', '')}]",
+           title=f"crossings of {ds.attrs.get('section', '')} ({ds.attrs.get('direction', '')}) after transients")
+    return fig

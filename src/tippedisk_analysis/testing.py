@@ -1,0 +1,84 @@
+"""Reference implementations for the tests and benchmarks: simple, slow, independent of the fast paths.
+
+Nothing in the library imports this module (tests/test_layering.py fails if anything does).
+"""
+
+from __future__ import annotations
+
+import copy
+import functools
+
+import heyoka as hy
+import numpy as np
+
+from .analysis import outcome_map as om
+from .analysis import reduced
+from .models import ode
+
+
+def finite_difference_jacobian(state, pars, h: float = 1e-6) -> np.ndarray:
+    """Central differences of the compiled reduced right-hand side, shape (7, 7)."""
+    x = np.asarray(state, dtype=float).reshape(reduced.N_STATE)
+    steps = h * (1.0 + np.abs(x))
+    plus = x[:, None] + np.diag(steps)
+    minus = x[:, None] - np.diag(steps)
+    pars = np.asarray(pars, dtype=float)
+    fp = reduced.evaluate(plus, pars)["rhs"]
+    fm = reduced.evaluate(minus, pars)["rhs"]
+    return (fp - fm) / (2 * steps[None, :])
+
+
+class _FirstInversion:
+    """nt_event callback: the first upward crossing of gamma = 0."""
+
+    def __init__(self):
+        self.first = om.FILL_TIME
+
+    def __call__(self, ta, time, d_sign):
+        if self.first == om.FILL_TIME:
+            self.first = time
+
+
+@functools.lru_cache(maxsize=4)
+def _scalar_integrator(tol: float):
+    """Scalar heyoka integrator of the outcome map's augmented system (the batch kernel's twin)."""
+    model, variables, sys, fall, outputs, gamma = om._augmented_system()
+    x0 = np.append(ode.initial_state_vector(model, om.Setup(), om.InitialState()), [0.0, 0.0])
+    return hy.taylor_adaptive(sys, x0, pars=ode.parameter_vector(), tol=tol,
+                              t_events=[hy.t_event(fall, direction=hy.event_direction.negative)],
+                              nt_events=[hy.nt_event(gamma, _FirstInversion(), direction=hy.event_direction.positive)])
+
+
+def outcome_chunk_scalar(config: om.MapConfig | dict, start: int, stop: int) -> dict:
+    """The same as :func:`.outcome_map.run_chunk`, one run at a time with a scalar integrator."""
+    if isinstance(config, dict):
+        config = om.MapConfig.from_dict(config)
+    x0, pars = om._prepare(config, start, stop)
+    n = stop - start
+    n_state = x0.shape[0] - 2
+    i_gamma = ode.EULER.state_names.index("gamma")
+    raw = {"final_state": np.empty_like(x0), "t_final": np.empty(n), "t_window": np.zeros(n),
+           "q_window": np.zeros((2, n)), "gamma_window": x0[i_gamma].copy(), "fell": np.zeros(n, bool),
+           "failed": np.zeros(n, bool), "inversion_time": np.full(n, om.FILL_TIME)}
+    t_w = config.t_end - config.window
+    ta = copy.copy(_scalar_integrator(float(config.tol)))
+    for i in range(n):
+        ta.time = 0.0
+        ta.state[:] = x0[:, i]
+        ta.pars[:] = pars[:, i]
+        ta.reset_cooldowns()
+        rec = ta.nt_events[0].callback
+        rec.first = om.FILL_TIME
+        for t_target in ((t_w,) if t_w > 0 else ()) + (config.t_end,):
+            oc = ta.propagate_until(t_target)[0]
+            if oc != hy.taylor_outcome.time_limit:
+                raw["fell" if int(oc) == -1 else "failed"][i] = True
+                break
+            if t_target == t_w:
+                raw["q_window"][:, i] = ta.state[n_state:]
+                raw["gamma_window"][i] = ta.state[i_gamma]
+                raw["t_window"][i] = t_w
+        raw["final_state"][:, i] = ta.state
+        raw["t_final"][i] = ta.time
+        raw["inversion_time"][i] = rec.first
+    return om._finish(config, om.kernel(float(config.tol), int(config.batch_size)), raw, pars)

@@ -1,0 +1,3 @@
+"""The package version (read by pyproject.toml and stored in every dataset)."""
+
+__version__ = "0.2.0"
