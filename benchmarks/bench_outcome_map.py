@@ -7,7 +7,7 @@ Measures, on this machine:
 4. dask.distributed LocalCluster with N worker processes (start-up, then the map),
    and an in-process LocalCluster (threads) to show the scheduler overhead alone.
 
-Run:  PYTHONPATH=src python benchmarks/bench_outcome_map.py [--n 64] [--t-end 5] [--workers 2]
+Run:  .venv/bin/python benchmarks/bench_outcome_map.py [--n 64] [--t-end 5] [--workers 2]
 Results of one run are printed; the machine may be shared, so treat them as indicative.
 """
 
@@ -32,6 +32,7 @@ def main() -> None:
 
     from tippedisk_analysis.analysis import outcome_map as om
     from tippedisk_analysis.analysis import sweeps
+    from tippedisk_analysis.testing import outcome_chunk_scalar
 
     cfg = om.MapConfig(ranges={"omega": (5.0, 80.0, args.n), "eps": (0.01, 0.3, args.n)}, t_end=args.t_end)
     print(f"grid {args.n} x {args.n} = {cfg.n_points} runs of {cfg.t_end:g} s, tol {cfg.tol:g}, "
@@ -43,8 +44,8 @@ def main() -> None:
     om.kernel(cfg.tol, cfg.batch_size)
     om.kernel(cfg.tol, hy.recommended_simd_size())
     warm = om.MapConfig(ranges={"omega": (30.0, 40.0, 2), "eps": (0.1, 0.2, 2)}, t_end=0.1)
-    sweeps.run_sweep(warm, progress=False)  # first-call costs of xarray / netCDF / thread pool
-    om.run_chunk_scalar(warm, 0, 1)
+    sweeps.run_sweep(om.sweep(warm), progress=False)  # first-call costs of xarray / netCDF / thread pool
+    outcome_chunk_scalar(warm, 0, 1)
     rows.append(("compile / load integrators, warm-up", time.perf_counter() - t0))
 
     def timed(label, fn):
@@ -54,18 +55,18 @@ def main() -> None:
         print(f"  {label}: {rows[-1][1]:.2f} s", flush=True)
         return out
 
-    ref = timed(f"batch {cfg.batch_size} lanes, 1 thread", lambda: sweeps.run_sweep(cfg, threads=1, progress=False))
+    ref = timed(f"batch {cfg.batch_size} lanes, 1 thread", lambda: sweeps.run_sweep(om.sweep(cfg), threads=1, progress=False))
     import dataclasses
 
     rec = dataclasses.replace(cfg, batch_size=hy.recommended_simd_size())
     r8 = timed(f"batch {rec.batch_size} lanes (recommended_simd_size), 1 thread",
-               lambda: sweeps.run_sweep(rec, threads=1, progress=False))
+               lambda: sweeps.run_sweep(om.sweep(rec), threads=1, progress=False))
     print(f"  outcome differs at {int((r8['outcome'] != ref['outcome']).sum())} of {cfg.n_points} points")
     thr = timed(f"batch {cfg.batch_size} lanes, {args.workers} threads (default)",
-                lambda: sweeps.run_sweep(cfg, threads=args.workers, progress=False))
+                lambda: sweeps.run_sweep(om.sweep(cfg), threads=args.workers, progress=False))
     assert np.array_equal(ref["outcome"], thr["outcome"])
     if not args.skip_scalar:
-        scalar = timed("scalar, one run at a time", lambda: om.run_chunk_scalar(cfg, 0, cfg.n_points))
+        scalar = timed("scalar, one run at a time", lambda: outcome_chunk_scalar(cfg, 0, cfg.n_points))
         assert np.array_equal(scalar["outcome"], ref["outcome"].values.ravel())
 
     from distributed import Client, LocalCluster
@@ -76,16 +77,16 @@ def main() -> None:
     rows.append((f"dask LocalCluster start ({args.workers} processes)", time.perf_counter() - t0))
     print(f"  {rows[-1][0]}: {rows[-1][1]:.2f} s", flush=True)
     dk = timed(f"dask {args.workers} processes, first map (workers load the kernel)",
-               lambda: sweeps.run_sweep(cfg, scheduler=client, progress=False))
+               lambda: sweeps.run_sweep(om.sweep(cfg), scheduler=client, progress=False))
     timed(f"dask {args.workers} processes, second map (warm workers)",
-          lambda: sweeps.run_sweep(cfg, scheduler=client, progress=False))
+          lambda: sweeps.run_sweep(om.sweep(cfg), scheduler=client, progress=False))
     assert np.array_equal(dk["outcome"], ref["outcome"])
     client.close()
     cluster.close()
 
     with LocalCluster(n_workers=1, threads_per_worker=args.workers, processes=False,
                       dashboard_address=None) as c2, Client(c2) as cl2:
-        timed("dask in-process LocalCluster (threads)", lambda: sweeps.run_sweep(cfg, scheduler=cl2, progress=False))
+        timed("dask in-process LocalCluster (threads)", lambda: sweeps.run_sweep(om.sweep(cfg), scheduler=cl2, progress=False))
 
     print("\nsummary")
     for label, seconds in rows:

@@ -224,3 +224,17 @@ def test_error_in_a_chunk_keeps_the_stored_chunks(tmp_path):
     computed = []
     sweeps.run_sweep(om.sweep(cfg), output=out, progress=False, on_chunk=computed.append)
     assert len(computed) == len(sweeps.chunk_bounds(om.sweep(cfg))) - 2 and out.exists()
+
+
+def test_validity_flag_marks_runs_whose_normal_force_turns_negative():
+    """lift_off_time is the first zero of lambda_N (an exact event); it agrees with a sampled simulation."""
+    import tippedisk_analysis as td
+
+    ds = om.outcome_map({"omega": (100.0, 300.0, 2), "eps": (0.1, 0.1, 1)}, t_end=1.0, progress=False)
+    valid, lift_off = ds["valid"].values.ravel(), ds["lift_off_time"].values.ravel()
+    assert list(valid) == [1, 0] and lift_off[0] == -1.0 and 0 < lift_off[1] < 1.0
+    assert "1 run(s) with lambda_N < 0" in ds.attrs["message"]
+    run = td.simulate("ode-euler", 1.0, initial=td.InitialState(alpha_dot=300.0), dt_output=1e-4)
+    first_negative = float(run.time[np.argmax(run.lambda_N.values < 0)])
+    assert first_negative - 1e-4 <= lift_off[1] <= first_negative
+    assert float(td.simulate("ode-euler", 1.0, initial=td.InitialState(alpha_dot=100.0)).lambda_N.min()) > 0

@@ -116,3 +116,15 @@ def test_quaternion_model_finds_the_same_crossings():
     assert quat.sizes["crossing"] == euler.sizes["crossing"] >= 1
     np.testing.assert_allclose(quat["time"], euler["time"], rtol=1e-7)
     np.testing.assert_allclose(quat["beta"], euler["beta"], atol=1e-7)
+
+
+def test_sections_and_diagrams_flag_runs_whose_normal_force_turns_negative():
+    """A fast spin (300 rad/s) makes lambda_N negative: the section says so, the diagram counts it as partial."""
+    fast = poincare.poincare_section("beta_dot=0", initial=InitialState(alpha_dot=300.0), t_end=0.5, tol=TOL)
+    assert fast.attrs["valid"] == 0 and 0 < fast.attrs["lift_off_time"] < 0.5
+    assert "lambda_N < 0 from t =" in fast.attrs["message"]
+    calm = poincare.poincare_section("beta_dot=0", t_end=0.5, tol=TOL)
+    assert calm.attrs["valid"] == 1 and "lift_off_time" not in calm.attrs
+    ds = bifurcation_diagram([40.0, 300.0], t_transient=0.1, t_end=0.5, max_crossings=2, tol=TOL, progress=False)
+    assert list(ds["valid"].values) == [1, 0] and ds.attrs["status"] == "partial"
+    assert "1 with lambda_N < 0" in ds.attrs["message"]

@@ -28,8 +28,8 @@ def finite_difference_jacobian(state, pars, h: float = 1e-6) -> np.ndarray:
     return (fp - fm) / (2 * steps[None, :])
 
 
-class _FirstInversion:
-    """nt_event callback: the first upward crossing of gamma = 0."""
+class _FirstCrossing:
+    """nt_event callback: the time of the first crossing."""
 
     def __init__(self):
         self.first = om.FILL_TIME
@@ -42,11 +42,12 @@ class _FirstInversion:
 @functools.lru_cache(maxsize=4)
 def _scalar_integrator(tol: float):
     """Scalar heyoka integrator of the outcome map's augmented system (the batch kernel's twin)."""
-    model, variables, sys, fall, outputs, gamma = om._augmented_system()
+    model, variables, sys, fall, outputs, gamma, lambda_N = om._augmented_system()
     x0 = np.append(ode.initial_state_vector(model, om.Setup(), om.InitialState()), [0.0, 0.0])
-    return hy.taylor_adaptive(sys, x0, pars=ode.parameter_vector(), tol=tol,
-                              t_events=[hy.t_event(fall, direction=hy.event_direction.negative)],
-                              nt_events=[hy.nt_event(gamma, _FirstInversion(), direction=hy.event_direction.positive)])
+    pos, neg = hy.event_direction.positive, hy.event_direction.negative
+    return hy.taylor_adaptive(sys, x0, pars=ode.parameter_vector(), tol=tol, t_events=[hy.t_event(fall, direction=neg)],
+                              nt_events=[hy.nt_event(gamma, _FirstCrossing(), direction=pos),
+                                         hy.nt_event(lambda_N, _FirstCrossing(), direction=neg)])
 
 
 def outcome_chunk_scalar(config: om.MapConfig | dict, start: int, stop: int) -> dict:
@@ -59,7 +60,8 @@ def outcome_chunk_scalar(config: om.MapConfig | dict, start: int, stop: int) -> 
     i_gamma = ode.EULER.state_names.index("gamma")
     raw = {"final_state": np.empty_like(x0), "t_final": np.empty(n), "t_window": np.zeros(n),
            "q_window": np.zeros((2, n)), "gamma_window": x0[i_gamma].copy(), "fell": np.zeros(n, bool),
-           "failed": np.zeros(n, bool), "inversion_time": np.full(n, om.FILL_TIME)}
+           "failed": np.zeros(n, bool), "inversion_time": np.full(n, om.FILL_TIME),
+           "lift_off_time": np.full(n, om.FILL_TIME)}
     t_w = config.t_end - config.window
     ta = copy.copy(_scalar_integrator(float(config.tol)))
     for i in range(n):
@@ -67,8 +69,8 @@ def outcome_chunk_scalar(config: om.MapConfig | dict, start: int, stop: int) -> 
         ta.state[:] = x0[:, i]
         ta.pars[:] = pars[:, i]
         ta.reset_cooldowns()
-        rec = ta.nt_events[0].callback
-        rec.first = om.FILL_TIME
+        inversion, lift_off = (event.callback for event in ta.nt_events)
+        inversion.first = lift_off.first = om.FILL_TIME
         for t_target in ((t_w,) if t_w > 0 else ()) + (config.t_end,):
             oc = ta.propagate_until(t_target)[0]
             if oc != hy.taylor_outcome.time_limit:
@@ -80,5 +82,6 @@ def outcome_chunk_scalar(config: om.MapConfig | dict, start: int, stop: int) -> 
                 raw["t_window"][i] = t_w
         raw["final_state"][:, i] = ta.state
         raw["t_final"][i] = ta.time
-        raw["inversion_time"][i] = rec.first
+        raw["inversion_time"][i] = inversion.first
+        raw["lift_off_time"][i] = lift_off.first
     return om._finish(config, om.kernel(float(config.tol), int(config.batch_size)), raw, pars)

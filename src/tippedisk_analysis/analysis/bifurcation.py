@@ -18,6 +18,7 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 import xarray as xr
 
+from ..defaults import BIFURCATION_TOL, FALL_ANGLE
 from ..errors import ParameterError
 from ..models import ode
 from ..parameters import InitialState, Setup, to_dict
@@ -30,8 +31,8 @@ ANGLES = ("alpha", "gamma")  # stored wrapped into (-pi, pi] as ``value``
 
 def bifurcation_diagram(omega, *, quantity: str = "gamma", section: str = "beta_dot=0", direction: str = "positive",
                         setup: Setup | None = None, initial: InitialState | None = None, t_transient: float = 5.0,
-                        t_end: float = 10.0, max_crossings: int = 50, tol: float = 1e-12,
-                        fall_angle: float = 0.1, progress: bool = True, threads: int | None = None) -> xr.Dataset:
+                        t_end: float = 10.0, max_crossings: int = 50, tol: float = BIFURCATION_TOL,
+                        fall_angle: float = FALL_ANGLE, progress: bool = True, threads: int | None = None) -> xr.Dataset:
     """``omega``: (start, stop, n) or an array of spin rates [rad/s]; runs on ``threads`` threads (default: cores)."""
     from tqdm import tqdm
 
@@ -44,7 +45,7 @@ def bifurcation_diagram(omega, *, quantity: str = "gamma", section: str = "beta_
         raise ParameterError(f"quantity {quantity!r} unknown; choose one of {', '.join(names)}")
     sec = poincare.parse_section(section, direction, model.name)
     setup, initial = setup or Setup(), initial or InitialState()
-    rows, n_cross, status = [], [], []
+    rows, n_cross, status, valid = [], [], [], []
 
     def one(om):
         return poincare.poincare_section(sec, model=model.name, setup=setup,
@@ -60,6 +61,7 @@ def bifurcation_diagram(omega, *, quantity: str = "gamma", section: str = "beta_
     for om, ds in zip(omegas, runs):
         n_cross.append(ds.sizes["crossing"])
         status.append(STATUS[ds.attrs["status"]])
+        valid.append(int(ds.attrs["valid"]))
         value = ds[quantity].values
         if quantity in ANGLES:  # unwrapped angles: wrap into (-pi, pi] to compare crossings
             value = np.pi - np.mod(np.pi - value, 2 * np.pi)
@@ -79,6 +81,9 @@ def bifurcation_diagram(omega, *, quantity: str = "gamma", section: str = "beta_
         "status_code": ("omega", np.array(status, dtype=np.int8),
                         {"flag_values": np.array(list(STATUS.values()), dtype=np.int8),
                          "flag_meanings": " ".join(STATUS), "long_name": "how the run ended"}),
+        "valid": ("omega", np.array(valid, dtype=np.int8),
+                  {"flag_values": np.array([0, 1], dtype=np.int8), "flag_meanings": "lift_off valid",
+                   "long_name": "1: lambda_N > 0 throughout the run (bilateral contact model valid)"}),
     }
     config = {"model": model.name, "setup": to_dict(setup), "initial": to_dict(initial), "quantity": quantity,
               "section": {"quantity": sec.quantity, "level": sec.level, "modulo": int(sec.modulo),
@@ -86,11 +91,14 @@ def bifurcation_diagram(omega, *, quantity: str = "gamma", section: str = "beta_
               "omega": omegas.tolist(), "t_transient": t_transient, "t_end": t_end, "max_crossings": max_crossings,
               "integrator": {"name": "heyoka.taylor_adaptive", "tol": tol, "fall_angle": fall_angle}}
     n_fell = int(np.sum(np.array(status) == STATUS["fell"]))
+    n_nonfinite = int(np.sum(np.array(status) == STATUS["nonfinite"]))
+    n_invalid = len(valid) - int(np.sum(valid))
     message = (f"{len(omegas)} spin rates, {len(cols[0])} crossings of {sec.label} after t = {t_transient:g} s"
-               f"; {n_fell} run(s) fell")
+               f"; {n_fell} run(s) fell, {n_nonfinite} non-finite, {n_invalid} with lambda_N < 0 (lift-off)")
+    run_status = "completed" if n_fell == n_nonfinite == n_invalid == 0 else "partial"
     out = xr.Dataset(data, coords={"omega": ("omega", omegas, {"units": "rad s-1",
                                                                "long_name": "initial spin rate Omega = alpha_dot(0)"})},
-                     attrs=make_attrs("bifurcation", config, "completed", message, model=model.name,
+                     attrs=make_attrs("bifurcation", config, run_status, message, model=model.name,
                                       paper_model=model.paper_name, quantity=quantity, section=sec.label,
                                       direction=sec.direction))
     return describe(out)

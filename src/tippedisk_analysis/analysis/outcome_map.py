@@ -156,8 +156,8 @@ def _point_setup(base: Setup, values: dict) -> tuple[Setup, InitialState]:
     return setup, InitialState(**init)
 
 
-class _InversionRecorder:
-    """Batch nt_event callback: first upward crossing of gamma = 0 per lane."""
+class _FirstCrossing:
+    """Batch nt_event callback: the first crossing per lane (gamma = 0 upwards; lambda_N = 0 downwards)."""
 
     def __init__(self):
         self.first = None  # per-lane first crossing time (FILL_TIME if none yet)
@@ -169,7 +169,11 @@ class _InversionRecorder:
 
 
 def _augmented_system():
-    """ODE Model 1 plus the quadratures Q1' = sin(gamma), Q2' = z_S (window means)."""
+    """ODE Model 1 plus the quadratures Q1' = sin(gamma), Q2' = z_S (window means).
+
+    Returns (model, variables, sys, fall, outputs, gamma, lambda_N): the event expressions of the
+    fall (terminal), the inversion (gamma = 0) and the lift-off (lambda_N = 0, non-terminal).
+    """
     import heyoka as hy
 
     model = ode.EULER
@@ -178,7 +182,7 @@ def _augmented_system():
     gamma = variables[model.state_names.index("gamma")]
     z_S = outputs[ode.OUTPUT_NAMES.index("z_S")]
     sys = [*sys, (q1, hy.sin(gamma)), (q2, z_S)]
-    return model, variables, sys, fall, outputs, gamma
+    return model, variables, sys, fall, outputs, gamma, outputs[ode.OUTPUT_NAMES.index("lambda_N")]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -193,7 +197,7 @@ def kernel(tol: float, batch_size: int = 4) -> BatchKernel:
     """Compiled batch integrator and outputs (cached per process; heyoka also caches on disk)."""
     import heyoka as hy
 
-    model, variables, sys, fall, outputs, gamma = _augmented_system()
+    model, variables, sys, fall, outputs, gamma, lambda_N = _augmented_system()
     B = int(batch_size)
     x0 = np.append(ode.initial_state_vector(model, Setup(), InitialState()), [0.0, 0.0])
     pars = ode.parameter_vector()
@@ -201,7 +205,8 @@ def kernel(tol: float, batch_size: int = 4) -> BatchKernel:
     batch = hy.taylor_adaptive_batch(
         sys, np.repeat(x0[:, None], B, axis=1), pars=np.repeat(pars[:, None], B, axis=1), tol=tol,
         t_events=[hy.t_event_batch(fall, direction=neg)],
-        nt_events=[hy.nt_event_batch(gamma, _InversionRecorder(), direction=pos)])
+        nt_events=[hy.nt_event_batch(gamma, _FirstCrossing(), direction=pos),
+                   hy.nt_event_batch(lambda_N, _FirstCrossing(), direction=neg)])
     return BatchKernel(batch, hy.cfunc(outputs, variables), B)
 
 
@@ -209,6 +214,8 @@ RESULT_VARIABLES = {
     # name: (dtype, units, long_name)
     "outcome": (np.int8, "1", "classified outcome of the run"),
     "inversion_time": (float, "s", "first upward crossing of gamma = 0 (fill -1: none)"),
+    "lift_off_time": (float, "s", "first time lambda_N fell through 0 (fill -1: the contact held)"),
+    "valid": (np.int8, "1", "1: lambda_N > 0 throughout (the bilateral contact model held), 0: it would lift off"),
     "fall_time": (float, "s", "time the tilt reached fall_angle (fill -1: did not fall)"),
     "t_final": (float, "s", "time the run ended"),
     "gamma_turns": (float, "1", "(gamma(t_final) - gamma(window start)) / (2 pi)"),
@@ -271,6 +278,8 @@ def _finish(config: MapConfig, k: BatchKernel, raw: dict, pars: np.ndarray) -> d
     res = {
         "outcome": outcome,
         "inversion_time": raw["inversion_time"],
+        "lift_off_time": raw["lift_off_time"],
+        "valid": (raw["lift_off_time"] < 0).astype(np.int8),
         "fall_time": np.where(raw["fell"], t_final, FILL_TIME),
         "t_final": t_final,
         "gamma_turns": turns,
@@ -304,7 +313,8 @@ def run_chunk(config: MapConfig | dict, start: int, stop: int) -> dict:
     n = stop - start
     raw = {"final_state": np.empty_like(x0), "t_final": np.empty(n), "t_window": np.empty(n),
            "q_window": np.zeros((2, n)), "gamma_window": np.empty(n), "fell": np.zeros(n, bool),
-           "failed": np.zeros(n, bool), "inversion_time": np.full(n, FILL_TIME)}
+           "failed": np.zeros(n, bool), "inversion_time": np.full(n, FILL_TIME),
+           "lift_off_time": np.full(n, FILL_TIME)}
     ta_template = copy.copy(k.integrator)  # one integrator per chunk, reused batch after batch
     for b0 in range(0, n, B):
         lanes = np.arange(b0, min(b0 + B, n))
@@ -324,9 +334,10 @@ def _run_batch(ta, x0: np.ndarray, pars: np.ndarray, config: MapConfig) -> dict:
     ta.state[:] = x0
     ta.pars[:] = pars
     ta.reset_cooldowns()
-    rec = ta.nt_events[0].callback
+    inversion, lift_off = (event.callback for event in ta.nt_events)
     done = np.zeros(B, bool)
-    rec.first, rec.done = np.full(B, FILL_TIME), done
+    for rec in (inversion, lift_off):
+        rec.first, rec.done = np.full(B, FILL_TIME), done
     fell, failed = np.zeros(B, bool), np.zeros(B, bool)
     final = np.empty_like(x0)
     t_final = np.empty(B)
@@ -380,7 +391,8 @@ def _run_batch(ta, x0: np.ndarray, pars: np.ndarray, config: MapConfig) -> dict:
     final[:, alive] = ta.state[:, alive]
     t_final[alive] = ta.time[alive]
     return {"final_state": final, "t_final": t_final, "t_window": t_window, "q_window": q_window,
-            "gamma_window": gamma_window, "fell": fell, "failed": failed, "inversion_time": rec.first.copy()}
+            "gamma_window": gamma_window, "fell": fell, "failed": failed, "inversion_time": inversion.first.copy(),
+            "lift_off_time": lift_off.first.copy()}
 
 
 def assemble(config: MapConfig, results: dict) -> xr.Dataset:
@@ -391,8 +403,11 @@ def assemble(config: MapConfig, results: dict) -> xr.Dataset:
     data = {}
     for name, (dtype, units, long_name) in RESULT_VARIABLES.items():
         attrs = {"units": units, "long_name": long_name}
-        if name in ("inversion_time", "fall_time"):
+        if name in ("inversion_time", "fall_time", "lift_off_time"):
             attrs["fill_value_meaning"] = f"{FILL_TIME:g} s where the event did not happen"
+        elif name == "valid":
+            attrs.update(flag_values=np.array([0, 1], dtype=np.int8), flag_meanings="lift_off valid",
+                         comment="exact: a heyoka event on lambda_N = 0 during the run (up to t_final)")
         elif name != "outcome":
             attrs["comment"] = "0 where outcome is failed (non-finite state): mask with the outcome flags"
         data[name] = (dims, np.asarray(results[name], dtype=dtype).reshape(shape), attrs)
@@ -413,6 +428,9 @@ def assemble(config: MapConfig, results: dict) -> xr.Dataset:
     status = "completed" if n_failed == 0 else "partial"
     message = (f"{config.n_points} runs of {config.t_end:g} s: "
                + ", ".join(f"{v} {k}" for k, v in counts.items()))
+    n_invalid = int(np.sum(np.asarray(results["valid"]) == 0))
+    message += (f"; {n_invalid} run(s) with lambda_N < 0 (the contact would lift off: outside the bilateral model, "
+                "see valid / lift_off_time)" if n_invalid else "; lambda_N > 0 in every run")
     if n_failed:
         message += "; failed runs hit a non-finite state: try a smaller --tol"
     ds = xr.Dataset(data, coords=coords,

@@ -144,6 +144,17 @@ class _Recorder:
         self.states.append(state)
 
 
+class _LiftOff:
+    """nt_event callback: the first time lambda_N falls through 0 (the contact would open)."""
+
+    def __init__(self):
+        self.time = None
+
+    def __call__(self, ta, time, d_sign):
+        if self.time is None:
+            self.time = float(time)
+
+
 @dataclass(frozen=True)
 class SectionIntegrator:
     model: ode.OdeModel
@@ -170,7 +181,9 @@ def section_integrator(model_name: str, quantity: str, modulo: bool, direction: 
     ta = hy.taylor_adaptive(
         sys, ode.initial_state_vector(model, setup, initial), pars=pars, tol=tol,
         t_events=[hy.t_event(fall, direction=hy.event_direction.negative)],
-        nt_events=[hy.nt_event(g, _Recorder(), direction=hy_dir)],
+        nt_events=[hy.nt_event(g, _Recorder(), direction=hy_dir),
+                   hy.nt_event(outputs[ode.OUTPUT_NAMES.index("lambda_N")], _LiftOff(),
+                               direction=hy.event_direction.negative)],
     )
     q_index = model.state_names.index(quantity) if quantity in model.state_names else None
     return SectionIntegrator(model, ta, hy.cfunc(outputs, variables), hy.cfunc([q], variables), q_index)
@@ -184,6 +197,7 @@ class Crossings:
     message: str
     t_final: float
     n_steps: int
+    lift_off_time: float | None  # first zero of lambda_N (None: the contact held)
 
 
 def crossings(section: Section, *, model_name: str = "ode-euler", setup: Setup | None = None,
@@ -202,7 +216,8 @@ def crossings(section: Section, *, model_name: str = "ode-euler", setup: Setup |
     ta.time = 0.0
     ta.state[:] = ode.initial_state_vector(si.model, setup, initial)
     ta.reset_cooldowns()
-    rec = ta.nt_events[0].callback
+    rec, lift_off = (event.callback for event in ta.nt_events)
+    lift_off.time = None
     rec.t_transient, rec.level, rec.modulo = float(t_transient), section.level, section.modulo
     rec.q_index, rec.q_func, rec.pars = si.q_index, si.quantity, pars[: si.quantity.nparams]
 
@@ -228,7 +243,10 @@ def crossings(section: Section, *, model_name: str = "ode-euler", setup: Setup |
         message = f"integration stopped ({outcome!r}) at t = {ta.time:.6g} s; try a smaller tol"
         keep = np.all(np.isfinite(states), axis=1)
         times, states = times[keep], states[keep]
-    return Crossings(times, states, status, message, float(ta.time), int(n_steps))
+    if lift_off.time is not None:
+        message += (f"; lambda_N < 0 from t = {lift_off.time:.6g} s: the disk would lift off, outside the bilateral "
+                    "model's validity")
+    return Crossings(times, states, status, message, float(ta.time), int(n_steps), lift_off.time)
 
 
 def _check(t_transient, t_end, max_crossings, tol, fall_angle) -> None:
@@ -288,7 +306,8 @@ def poincare_section(section: str | Section = "beta_dot=0", *, direction: str = 
         coords={"crossing": np.arange(n, dtype=np.int64)},
         attrs=make_attrs("poincare", config, cr.status, cr.message, model=model_name, paper_model=m.paper_name,
                          section=sec.label, direction=sec.direction, n_crossings=n, t_final=cr.t_final,
-                         n_steps=cr.n_steps),
+                         n_steps=cr.n_steps, valid=int(cr.lift_off_time is None),
+                         lift_off_time=cr.lift_off_time),
     )
     ds["n_crossings"] = ((), np.int64(n), {"units": "1", "long_name": "number of crossings stored"})
     ds["crossing"].attrs.update(units="1", long_name="crossing index (after the transient)")
