@@ -257,6 +257,48 @@ def test_smooth_coulomb_energy_balance_over_5s_is_first_order():
     assert 1.7 < residual[0] / residual[1] < 2.3, residual  # first order in dt
 
 
+def _contact_velocity(R, omega_B, v_G, r):
+    """Velocity of the material point at C1 (2.13), I-frame: v_G + Omega x r_GC1, r_GC1 from (2.10)."""
+    return v_G + np.cross(R @ omega_B, kin.contact_point_offsets(R, r)[0])
+
+
+@pytest.mark.parametrize("mu, e_N, e_T, sticks", [(2.0, 0.5, 0.5, True), (2.0, 0.3, 1.0, True),
+                                                  (0.1, 0.5, 0.5, False)])
+def test_impact_with_slip_tangential_newton_law(mu, e_N, e_T, sticks):
+    """Set-valued Coulomb with tangential restitution e_T > 0 (2.28), (4.3)-(4.5): at the impact step
+    xi_T = gamma_T^E + e_T gamma_T^A. Sticking (|P_T| < mu P_N): xi_T = 0, the slip reverses,
+    gamma_T^E = -e_T gamma_T^A; sliding: |P_T| = mu P_N and P_T opposes xi_T. Newton (2.21) normally."""
+    model = MODELS["moreau-coulomb-euler"]
+    setup = Setup(friction=Friction(mu=mu, e_N=e_N, e_T=e_T))
+    dt, r, beta = 1e-5, setup.disk.r, 1.2
+    q = np.array([0.0, 0.0, r * math.sin(beta) + 2e-5, 0.0, beta, 0.0, 0.0])  # C1 20 um above the table
+    u = np.array([0.1, 0.05, -0.3, 0.0, 0.0, 0.0])  # falling and sliding, no rotation
+    rows, status, failures, _, _, _ = driver.integrate(model, setup, InitialState(), 1e-4, dt=dt, store_every=1,
+                                                       state=(q, u))
+    assert status == 0 and failures == 0
+    data = dataset.outputs(model, setup, rows, dt)
+    k = int(np.argmax(data["P_N"][:, 0] > 0))  # the impact step
+    assert k > 0 and np.all(data["P_N"][:k] == 0)
+    q_E, u_A, u_E = rows[k, layout.COL_Q:layout.COL_Q + 6], rows[k - 1, layout.COL_U:layout.COL_U + 6], \
+        rows[k, layout.COL_U:layout.COL_U + 6]
+    q_M = q_E - 0.5 * dt * u_E
+    R = kin.rotation_from_euler(*q_M[3:6])
+    g_A = _contact_velocity(R, kin.omega_from_euler_rates(q_M[4], q_M[5], u_A[3:]), u_A[:3], r)
+    g_E = _contact_velocity(R, kin.omega_from_euler_rates(q_M[4], q_M[5], u_E[3:]), u_E[:3], r)
+    assert np.hypot(*g_A[:2]) > 0.1 and g_A[2] < -0.29  # an impact with slip
+    P_N = data["P_N"][k, 0]
+    P_T = np.array([data["P_Tx"][k, 0], data["P_Ty"][k, 0]])
+    assert g_E[2] == pytest.approx(-e_N * g_A[2], abs=1e-6)  # (2.21)
+    xi_T = g_E[:2] + e_T * g_A[:2]
+    if sticks:
+        assert np.hypot(*P_T) < mu * P_N
+        np.testing.assert_allclose(g_E[:2], -e_T * g_A[:2], atol=1e-6)  # the slip reverses by e_T
+    else:
+        assert np.hypot(*P_T) == pytest.approx(mu * P_N, rel=1e-12)
+        np.testing.assert_allclose(P_T / np.hypot(*P_T), -xi_T / np.hypot(*xi_T), atol=1e-6)
+        assert np.hypot(*xi_T) > 0.1
+
+
 def test_iteration_limit_is_reported_not_silent():
     ds = simulate("m3", 0.01, max_iter=1, tol=1e-15)
     assert ds.attrs["status"] == "not_converged"
