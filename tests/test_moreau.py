@@ -299,6 +299,50 @@ def test_impact_with_slip_tangential_newton_law(mu, e_N, e_T, sticks):
         assert np.hypot(*xi_T) > 0.1
 
 
+def _flat_spin_state(beta, spin=10.0):
+    """Quaternion state: the disk tilted by beta (nearly flat), C1 on the table, spinning about its normal."""
+    q = np.zeros(7)
+    q[2] = Setup().disk.r * math.sin(beta)
+    q[3:7] = kin.quaternion_from_rotation(kin.rotation_from_euler(0.0, beta, 0.0))
+    return q, np.array([0.0, 0.0, 0.0, 0.0, 0.0, spin])
+
+
+def _run_flat_spin(name, beta, setup, spin=10.0):
+    model = MODELS[name]
+    rows, status, failures, steps, _, _ = driver.integrate(model, setup, InitialState(), 0.01, store_every=10,
+                                                           state=_flat_spin_state(beta, spin))
+    return dataset.outputs(model, setup, rows, defaults.MOREAU_DT), status, failures, steps
+
+
+def _assert_flat_spin_runs_cleanly(data, status, failures, steps):
+    assert layout.STATUS_NAMES[status] == "completed", layout.STATUS_NAMES[status]
+    assert failures == 0
+    assert steps == 1000
+    assert all(np.all(np.isfinite(v)) for v in data.values())
+    assert data["E_tot"][-1] < data["E_tot"][0]  # friction on the table slows the spin
+
+
+@pytest.mark.xfail(strict=True, reason="issue 14 item 1: near-flat prox divergence")
+@pytest.mark.parametrize("spin", [10.0, 40.0])
+@pytest.mark.parametrize("beta", [1e-3, 1e-5])
+@pytest.mark.parametrize("name", ["moreau-coulomb-pivot-contour-quaternion", "moreau-smooth-pivot-contour-quaternion"])
+def test_pivot_contour_models_run_through_a_nearly_flat_disk(name, beta, spin):
+    """Acceptance test of issue 14 item 1: Models 8/10 started nearly flat (beta = 1e-3, 1e-5) spinning
+    about the disk normal run 0.01 s without prox failures and without a non-finite state (today:
+    'nonfinite' after 37-344 steps, or 'completed' with prox failures in 251 steps at 40 rad/s)."""
+    _assert_flat_spin_runs_cleanly(*_run_flat_spin(name, beta, Setup(), spin))
+
+
+@pytest.mark.parametrize("beta", [1e-3, 1e-5])
+@pytest.mark.parametrize("name, friction", [("moreau-coulomb-quaternion", Friction()),
+                                            ("moreau-smooth-quaternion", Friction()),
+                                            ("moreau-coulomb-pivot-contour-quaternion", Friction(mu_R=0.0))])
+def test_nearly_flat_spin_runs_without_contour_friction(name, friction, beta):
+    """Control for the test above: the same start runs cleanly without contour friction (Models 2/6,
+    or Model 8 with mu_R = 0), so the start itself is sound."""
+    _assert_flat_spin_runs_cleanly(*_run_flat_spin(name, beta, Setup(friction=friction)))
+
+
 def test_iteration_limit_is_reported_not_silent():
     ds = simulate("m3", 0.01, max_iter=1, tol=1e-15)
     assert ds.attrs["status"] == "not_converged"
