@@ -38,6 +38,8 @@ def test_quaternion_norm_is_kept(table3_quaternion):
 
 
 def test_euler_and_quaternion_models_agree(table3_euler, table3_quaternion):
+    """Both models share ``contact_dynamics``: this checks the orientation kinematics (3.8) vs (3.44)
+    along a run; the dynamics of each is checked against the Lagrangian model below."""
     np.testing.assert_array_equal(table3_euler.time, table3_quaternion.time)
     assert float(abs(table3_euler.gamma - table3_quaternion.gamma).max()) < 1e-8
     assert float(abs(table3_euler.beta - table3_quaternion.beta).max()) < 1e-8
