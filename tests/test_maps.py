@@ -8,7 +8,9 @@ from xarray.testing import assert_identical
 
 from tippedisk_analysis import Friction, ParameterError, Setup, results
 from tippedisk_analysis.analysis import maps
+from tippedisk_analysis.analysis import reduced
 from tippedisk_analysis.analysis import stability as sb
+from tippedisk_analysis.analysis import stationary as st
 from tippedisk_analysis.cli import main
 
 OMEGA = np.linspace(20.0, 45.0, 26)
@@ -67,6 +69,37 @@ def test_critical_speeds_are_sign_changes_refined_to_1e_6(small_map):
     curves = maps.critical_speed_curves(ds)
     assert set(curves) == {"noninverted", "inverted"}
     assert int(np.isfinite(curves["inverted"]).sum()) == int(n.sel(branch="inverted").sum())
+
+
+def test_critical_frequency_is_the_crossing_eigenvalue(small_map):
+    """critical_frequency = |Im s| of the eigenvalue on the imaginary axis at Omega_c: the Hopf pair's
+    frequency, and 0 where a real eigenvalue crosses. Checked with numpy's eigenvalues of the full 7x7
+    Jacobian at the stored Omega_c (structural zero included, no deflation or sorting shared with maps)."""
+    ds = small_map
+    kinds = []
+    for b in ds["branch"].values:
+        for eps in EPS:
+            k = int(ds["n_critical"].sel(branch=b, eps=eps))
+            pars = maps._parameter_grid(Setup(), {"eps": [eps]}, 1e-12, (1, 1))[:, 0]
+            for om, freq in zip(ds["omega_critical"].sel(branch=b, eps=eps).values[:k],
+                                ds["critical_frequency"].sel(branch=b, eps=eps).values[:k]):
+                J = reduced.jacobian(st.stationary_state(str(b), [om]), pars)[0]
+                ev = np.linalg.eigvals(J)
+                on_axis = ev[np.abs(ev.real) < 1e-9 * np.abs(J).max()]
+                others = ev[np.abs(ev.real) >= 1e-9 * np.abs(J).max()]
+                assert np.all(np.abs(others.real) > 1e-3)  # the crossing is isolated
+                if len(on_axis) == 3:  # structural zero and a Hopf pair +-i w
+                    w = np.sort(on_axis.imag)
+                    assert w[1] == pytest.approx(0.0, abs=1e-9) and w[0] == pytest.approx(-w[2], rel=1e-9)
+                    assert freq == pytest.approx(w[2], rel=1e-8) and freq > 1.0
+                    kinds.append("hopf")
+                else:  # structural zero and the real eigenvalue crossing zero
+                    assert len(on_axis) == 2 and np.all(on_axis.imag == 0.0)
+                    assert freq == 0.0
+                    kinds.append("real")
+    assert {"hopf", "real"} <= set(kinds)  # both kinds occur in this map (eps = 0.25, inverted branch)
+    pad = ds["crossing"] >= ds["n_critical"]
+    assert np.all(ds["critical_frequency"].where(pad, 0.0) == 0.0)  # 0 for padding
 
 
 def test_netcdf_round_trip(small_map, tmp_path):

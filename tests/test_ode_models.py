@@ -38,6 +38,8 @@ def test_quaternion_norm_is_kept(table3_quaternion):
 
 
 def test_euler_and_quaternion_models_agree(table3_euler, table3_quaternion):
+    """Both models share ``contact_dynamics``: this checks the orientation kinematics (3.8) vs (3.44)
+    along a run; the dynamics of each is checked against the Lagrangian model below."""
     np.testing.assert_array_equal(table3_euler.time, table3_quaternion.time)
     assert float(abs(table3_euler.gamma - table3_quaternion.gamma).max()) < 1e-8
     assert float(abs(table3_euler.beta - table3_quaternion.beta).max()) < 1e-8
@@ -66,37 +68,68 @@ def test_fig13_inversion(table3_euler):
     assert float(ds.E_tot.diff("time").max()) <= 1e-12  # never gains energy
 
 
-def _random_manifold_states(n, seed=3):
-    """States on the constraint manifold (g_N1 = gamma_N1 = 0), Euler-model layout."""
+def _manifold_states(n, seed=3):
+    """States (r_OG, euler, v_G, omega) on the constraint manifold (g_N1 = gamma_N1 = 0), and their slips.
+
+    n random states (beta in [0.3, pi - 0.3], slip of order 0.3 m/s), then states the random
+    draw misses: large tilt (beta = 0.12 and pi - 0.12, just above the fall angle 0.1) and
+    near-zero slip (1e-9 and 1e-6 m/s, far below eps = 0.1 m/s, where (2.29) is linear and
+    heyoka's |gamma_T| carries the slip_smoothing delta = 1e-12), and the Table 3 start (zero slip).
+    """
     rng = np.random.default_rng(seed)
-    states = []
-    for _ in range(n):
+    cases = [(rng.uniform(0.3, math.pi - 0.3), rng.normal(scale=0.3, size=2)) for _ in range(n)]
+    cases += [(0.12, rng.normal(scale=0.3, size=2)), (math.pi - 0.12, rng.normal(scale=0.3, size=2))]
+    cases += [(rng.uniform(0.3, math.pi - 0.3), s * np.array([0.6, -0.8])) for s in (1e-9, 1e-6)]
+    cases += [(0.12, 1e-9 * np.array([-0.6, 0.8]))]
+    states, slips = [], []
+    for beta, slip in cases:
         alpha, gamma = rng.uniform(-math.pi, math.pi, 2)
-        beta = rng.uniform(0.3, math.pi - 0.3)
         omega = rng.normal(scale=20.0, size=3)
-        beta_dot = omega[0] * math.cos(gamma) - omega[1] * math.sin(gamma)
-        v_G = [*rng.normal(scale=0.3, size=2), DISK.r * math.cos(beta) * beta_dot]
-        states.append([*rng.normal(scale=0.01, size=2), DISK.r * math.sin(beta), alpha, beta, gamma, *v_G, *omega, 0.0])
-    return np.array(states)
+        R = kin.rotation_from_euler(alpha, beta, gamma)
+        r_GC1 = kin.contact_point_offsets(R, DISK.r)[0]
+        v_G = -np.cross(R @ omega, r_GC1) + [*slip, 0.0]  # v_C1 = (slip, 0): closed, gamma_N1 = 0
+        r_OG = np.array([*rng.normal(scale=0.01, size=2), DISK.r * math.sin(beta)])
+        states.append((r_OG, np.array([alpha, beta, gamma]), v_G, omega))
+        slips.append(slip)
+    init = td.InitialState()
+    rest = kin.rest_contact_state(DISK.r, init.euler, init.euler_rates)
+    states.append((np.array([0.0, 0.0, rest["z"]]), init.euler, rest["v_G"], rest["omega"]))
+    slips.append(np.zeros(2))
+    return states, np.array(slips)
+
+
+def _ode_rhs(model):
+    """Compiled right-hand side and lambda_N of ``model`` at a batch of states."""
+    variables, sys, _fall, outputs = ode.system(model)
+    names = [f for _, f in sys] + [outputs[ode.OUTPUT_NAMES.index(k)] for k in ("lambda_N", "slip_x", "slip_y")]
+    cf = hy.cfunc(names, variables)
+    pars = ode.parameter_vector(SETUP)
+
+    def evaluate(states):
+        values = cf(np.ascontiguousarray(np.array(states).T), pars=np.repeat(pars[: cf.nparams, None], len(states), 1))
+        return values.T
+
+    return evaluate
+
+
+def _lagrange_reference(r_OG, euler, v_G, omega):
+    """(q_dd, lambda_N, phi_dot) of the independent Lagrangian model (4.10) at one state."""
+    phi_dot = kin.euler_rates_from_omega(euler[1], euler[2], omega)
+    q_dd, lambda_N = LagrangeModel(SETUP).accelerations(np.concatenate([r_OG, euler]),
+                                                          np.concatenate([v_G, phi_dot]))
+    return q_dd, lambda_N, phi_dot
 
 
 def test_rhs_matches_independent_lagrangian_model():
-    """Newton-Euler about S (heyoka) against M q_dd - h = f_g + W_NT lambda_N, (3.11)/(4.10), in numpy."""
-    variables, sys, _fall, outputs = ode.system(ode.EULER)
-    rhs = hy.cfunc([f for _, f in sys] + [outputs[ode.OUTPUT_NAMES.index("lambda_N")]], variables)
-    pars = ode.parameter_vector(SETUP, fall_angle=0.1, slip_smoothing=1e-12)
-    reference = LagrangeModel(SETUP)
-    states = _random_manifold_states(12)
-    # one zero-slip state (Table 3 start): the heyoka law must stay finite there
-    states = np.vstack([states, ode.initial_state_vector(ode.EULER, SETUP, td.InitialState())])
-    values = rhs(states.T.copy(), pars=np.repeat(pars[: rhs.nparams, None], len(states), axis=1)).T
+    """ODE Model 1: Newton-Euler about S (heyoka) against M q_dd - h = f_g + W_NT lambda_N, (3.11)/(4.10), in numpy."""
+    states, slips = _manifold_states(12)
+    rows = [[*r, *phi, *v, *w, 0.0] for r, phi, v, w in states]
+    values = _ode_rhs(ode.EULER)(rows)
     assert np.all(np.isfinite(values))
-    for state, value in zip(states, values):
-        phi, omega = state[3:6], state[9:12]
-        phi_dot = kin.euler_rates_from_omega(phi[1], phi[2], omega)
-        q, q_dot = np.concatenate([state[:3], phi]), np.concatenate([state[6:9], phi_dot])
-        q_dd, lambda_N = reference.accelerations(q, q_dot)
-        np.testing.assert_allclose(value[:3], state[6:9], rtol=1e-14)  # r_dot = v_G
+    np.testing.assert_allclose(values[:, 14:16], slips, rtol=1e-6, atol=1e-15)  # (3.27): the slip we built in
+    for (r_OG, phi, v_G, omega), value in zip(states, values):
+        q_dd, lambda_N, phi_dot = _lagrange_reference(r_OG, phi, v_G, omega)
+        np.testing.assert_allclose(value[:3], v_G, rtol=1e-14)  # r_dot = v_G
         np.testing.assert_allclose(value[3:6], phi_dot, rtol=1e-12, atol=1e-12)  # (3.8)
         np.testing.assert_allclose(value[6:9], q_dd[:3], rtol=1e-8, atol=1e-9)  # a_G
         h = 1e-6  # omega_dot = d/dt omega(beta, gamma, phi_dot) along (phi_dot, phi_dd)
@@ -104,6 +137,38 @@ def test_rhs_matches_independent_lagrangian_model():
         minus = kin.omega_from_euler_rates(phi[1] - h * phi_dot[1], phi[2] - h * phi_dot[2], phi_dot - h * q_dd[3:])
         np.testing.assert_allclose(value[9:12], (plus - minus) / (2 * h), rtol=1e-6, atol=1e-5)
         assert value[13] == pytest.approx(lambda_N, rel=1e-9)
+
+
+def _skew(a):
+    return np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+
+
+def test_quaternion_rhs_matches_independent_lagrangian_model():
+    """ODE Model 2 against the Lagrangian Model 1 mapped through the kinematics (no shared contact code).
+
+    The two ODE models share ``contact_dynamics``, so their agreement along a run only tests the
+    orientation kinematics; here Model 2's accelerations meet the independent derivation
+    (models/lagrange.py): a_G = q_dd[:3], Psi = J_R phi_dd + J_R_dot phi_dot (3.3) differentiated,
+    lambda_N equal, and p_dot (3.44) moves R(p) as R Omega~ (Poisson's equation).
+    """
+    states, slips = _manifold_states(12, seed=5)
+    rows = [[*r, *kin.quaternion_from_rotation(kin.rotation_from_euler(*phi)), *v, *w, 0.0]
+            for r, phi, v, w in states]
+    values = _ode_rhs(ode.QUATERNION)(rows)
+    assert np.all(np.isfinite(values))
+    np.testing.assert_allclose(values[:, 15:17], slips, rtol=1e-6, atol=1e-15)  # (3.27): the slip we built in
+    for (r_OG, phi, v_G, omega), row, value in zip(states, rows, values):
+        q_dd, lambda_N, phi_dot = _lagrange_reference(r_OG, phi, v_G, omega)
+        scale = 1.0 + np.abs(q_dd).max()
+        np.testing.assert_allclose(value[:3], v_G, rtol=1e-14)
+        np.testing.assert_allclose(value[7:10], q_dd[:3], rtol=1e-8, atol=1e-9 * scale)  # a_G
+        J_R = np.array(kin.omega_entries_from_euler_rates(phi[1], phi[2], *np.eye(3)))  # (3.3) columns
+        psi = J_R @ q_dd[3:] + np.array(kin.omega_derivative_entries_at_fixed_rates(phi[1], phi[2], *phi_dot))
+        np.testing.assert_allclose(value[10:13], psi, rtol=1e-8, atol=1e-9 * scale)  # omega_dot
+        assert value[14] == pytest.approx(lambda_N, rel=1e-9)
+        p, p_dot, h = np.array(row[3:7]), value[3:7], 1e-6
+        R_dot = (kin.rotation_from_quaternion(p + h * p_dot) - kin.rotation_from_quaternion(p - h * p_dot)) / (2 * h)
+        np.testing.assert_allclose(R_dot, kin.rotation_from_euler(*phi) @ _skew(omega), atol=1e-7 * (1 + abs(omega).max()))
 
 
 def test_zero_slip_start_does_not_stall(table3_euler):
@@ -166,3 +231,31 @@ def test_nonfinite_state_ends_run_with_status(monkeypatch):
     assert "non-finite" in ds.attrs["message"]
     for name in ds.data_vars:
         assert np.all(np.isfinite(ds[name].values)), name
+
+
+@pytest.mark.parametrize("beta_dot, starts_negative", [(30.0, True), (14.0, False)])
+def test_negative_normal_force_is_reported(beta_dot, starts_negative):
+    """A fast tilting start (r beta_dot^2 comparable to g) needs lambda_N < 0 to keep the bilateral
+    contact closed: the disk would lift off. The run keeps going (the ODE is defined) but says so:
+    the message names the first time of lambda_N < 0, the attribute lambda_N_min is negative, and
+    lambda_N agrees with the independent Lagrangian model at the start."""
+    init = td.InitialState(beta_dot=beta_dot)
+    ds = td.simulate("ode-euler", 0.2, initial=init, dt_output=1e-3)
+    lam = ds.lambda_N.values
+    first = int(np.argmax(lam < 0))
+    assert lam[first] < 0 and np.all(lam[:first] >= 0)
+    assert (first == 0) == starts_negative
+    t_neg = float(ds.time[first])
+    assert ds.attrs["status"] == "completed"
+    assert ds.attrs["message"] == (f"reached t_end = 0.2 s; lambda_N < 0 from t = {t_neg:.6g} s: the disk would lift "
+                                   "off, outside the bilateral model's validity (use a Moreau model)")
+    assert ds.attrs["lambda_N_min"] == float(lam.min()) < 0
+    rest = kin.rest_contact_state(DISK.r, init.euler, init.euler_rates)
+    _q_dd, lambda_0, _ = _lagrange_reference(np.array([0.0, 0.0, rest["z"]]), init.euler, rest["v_G"], rest["omega"])
+    assert float(ds.lambda_N[0]) == pytest.approx(lambda_0, rel=1e-9)
+    assert (lambda_0 < 0) == starts_negative
+
+
+def test_valid_run_reports_no_negative_normal_force(table3_euler):
+    assert "lambda_N < 0" not in table3_euler.attrs["message"]
+    assert table3_euler.attrs["lambda_N_min"] == float(table3_euler.lambda_N.min()) > 0
