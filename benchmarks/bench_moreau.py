@@ -17,6 +17,7 @@ import time
 import numpy as np
 
 from tippedisk_analysis import kinematics as kin
+from tippedisk_analysis.defaults import CONTOUR_REGULARISATION
 from tippedisk_analysis.models import prox
 from tippedisk_analysis.parameters import InitialState, Setup
 from tippedisk_analysis.solvers.moreau import driver, layout
@@ -67,7 +68,7 @@ def numpy_step(model, setup, q, u, exg, Pw, dt=1e-5, tol=1e-8, max_iter=1000, rN
     use_tau = model.law == mo.CONTENSOU or model.pivot_contour
     c = np.zeros(3)
     if model.pivot_contour:
-        k = R[2, 2] ** 2 / s**2
+        k = R[2, 2] ** 2 / (s**2 + CONTOUR_REGULARISATION**2)  # (3.64), regularised as in the step loop
         c = R.T @ np.array([k * R[0, 2], k * R[1, 2], -R[2, 2]]) + np.array([0, 0, 1.0])
     rows, kinds, contact = [], [], []
     for i in np.flatnonzero(gaps <= 0):

@@ -94,9 +94,6 @@ def _newton_residual(x, omega, pars):
     return max(np.abs(ev["rhs"]).max(), abs(ev["alpha_dot"][0] - omega))
 
 
-@pytest.mark.xfail(strict=True, reason="library bug: on max_iter, stationary.solve returns the iterate after the "
-                                       "last Newton step but the residual of the iterate before it (Equilibrium "
-                                       "documents residual as 'max |rhs| at state')")
 def test_max_iter_residual_belongs_to_the_returned_state():
     eq = st.solve(GUESS_FAR, 40.0, PARS, max_iter=8)
     assert eq.residual == pytest.approx(_newton_residual(eq.state, 40.0, PARS), rel=1e-6)

@@ -46,8 +46,15 @@ MOREAU_MAX_ITER = 1000
 """Prox sweeps per step before the step counts as a convergence failure (reported, never silent)."""
 
 MOREAU_GAINS = {"r_N": 0.1, "r_T": 0.1, "r_tau": 0.1, "r_R": 1e-4}
-"""Prox gains r of (4.4)-(4.7). Each is capped per step by 1 / G_jj of the Delassus matrix, so the
-Jacobi sweep of a single force law contracts (the solution does not depend on r)."""
+"""Prox gains r of (4.4)-(4.7). Each is capped per step at 1.5 / G_jj of the Delassus matrix
+(solvers/moreau/step.py), so the sweep of a single column contracts where a force direction grows
+large; the solution does not depend on r."""
+
+CONTOUR_REGULARISATION = 1e-2
+"""s_reg of the contour friction direction (3.64), 1/sin^2(beta) -> 1/(sin^2(beta) + s_reg^2)
+(models/moreau_geometry.contour_direction): bounds the contour torque of a nearly flat disk
+(tilt below ~0.6 deg, where the thin-disk rim contact has no physical meaning: the 10-mm-thick
+disk lies on its face); changes (3.64) by (s_reg / sin(beta))^2 relative, 1e-4 for an upright disk."""
 
 MOREAU_STORE_INTERVAL = 1e-3
 """Output sampling [s] of Moreau runs: 5000 samples for a 5-s run."""

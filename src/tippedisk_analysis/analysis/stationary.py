@@ -111,6 +111,8 @@ def solve(guess, omega: float, pars=None, *, tol: float = NEWTON_TOL, max_iter: 
                 message = (f"Newton stalled at a least-squares minimum with residual {res:.3g}: "
                            "no equilibrium near the guess")
             break
+    else:  # max_iter: report the residual at the returned iterate, not at the one before it
+        res = float(np.max(np.abs(_newton_system(x, omega, pars)[0])))
     lam = float(evaluate(x, pars)["lambda_N"][0]) if np.all(np.isfinite(x)) else math.nan
     if status == "converged" and not lam > 0:
         status, message = "lift_off", f"equilibrium has lambda_N = {lam:.3g} N <= 0: the contact would open"

@@ -143,20 +143,28 @@ def contact_offsets(R, exg, r, off):
 
 
 @njit(cache=True)
-def contour_direction(R, s, c):
+def contour_direction(R, s, s_reg, c):
     """c (B-frame) with phi_dot = c . Omega: spin of the body relative to the floating frame.
 
     phi_dot = (Omega - omega_G) . e_z^B with omega_G . e_z^B = e_x^G_dot . e_y^G
             = R33 w_Iz - R33^2 (w_Ix R13 + w_Iy R23) / s^2   (w_I = R Omega, s = sin beta),
     derived from (2.8); for Euler angles phi_dot = gamma_dot, so gamma_R = -r phi_dot is
-    (3.34) and (3.63). Zero for a horizontal disk (W_R = 0, Sect. 3.2).
+    (3.34) and (3.63). The paper's (3.64) prints the first two entries of the row vector with
+    the wrong sign: in Euler angles it gives omega_z + cos(beta) alpha_dot, not gamma_dot
+    = omega_z - cos(beta) alpha_dot (3.8).
+
+    Regularised near a flat disk: 1/s^2 is replaced by 1/(s^2 + s_reg^2). The exact term grows
+    like 1/sin(beta) (the contact point runs round the rim ever faster), so the contour torque
+    r mu_R lambda_N |c| of (2.31) would be unbounded; with s_reg it is at most about
+    r mu_R lambda_N / (2 s_reg), and for s >> s_reg the law is unchanged (relative change
+    (s_reg / s)^2). s_reg = 0 gives the exact law. Zero for a horizontal disk (W_R = 0, Sect. 3.2).
     """
     if s <= HORIZONTAL_SIN_BETA:
         c[0] = 0.0
         c[1] = 0.0
         c[2] = 0.0
         return
-    k = R[2, 2] * R[2, 2] / (s * s)
+    k = R[2, 2] * R[2, 2] / (s * s + s_reg * s_reg)
     # I-frame row vector multiplying w_I
     i0 = k * R[0, 2]
     i1 = k * R[1, 2]

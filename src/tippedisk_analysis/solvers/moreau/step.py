@@ -25,6 +25,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ...defaults import CONTOUR_REGULARISATION
 from ...models import moreau_geometry as geo
 from . import force_laws as law
 from .layout import (A_S, B_S, C_S, COL_GAP, COL_IMPULSE, COL_ITER_MAX, COL_ITER_MEAN, COL_N_CLOSED, COL_Q,
@@ -34,6 +35,9 @@ from .layout import (A_S, B_S, C_S, COL_GAP, COL_IMPULSE, COL_ITER_MAX, COL_ITER
                      R_R, R_T, R_TAU, RADIUS, SIN_FALL_ANGLE, STAT_FAILURES, STAT_ITER_MAX, STAT_ITER_SUM,
                      STAT_N_CLOSED, STAT_STEPS, STATUS_FELL, STATUS_NONFINITE, STATUS_OK, STORE_EVERY, TOL)
 from .models import CONTENSOU, COULOMB, EULER, QUATERNION, SMOOTH
+
+GAIN_CAP = 1.5  # largest r_j G_jj of a prox gain (convergence needs < 2 for one column)
+CONTOUR_SIN_BETA_REG = CONTOUR_REGULARISATION  # numba reads module globals as constants
 
 
 @njit(cache=True)
@@ -110,6 +114,7 @@ def run_steps(q, u, ex_G, P_last, par, flags, ball, n_steps, step0, out, row0, s
     gamma_A = np.zeros(MAX_COLUMNS)
     P = np.zeros(MAX_COLUMNS)
     P_new = np.zeros(MAX_COLUMNS)
+    r_col = np.zeros(MAX_COLUMNS)  # prox gain of each column, capped by the Delassus diagonal
     column_contact = np.zeros(MAX_COLUMNS, np.int64)
     column_kind = np.zeros(MAX_COLUMNS, np.int64)
     column = np.zeros((N_CONTACTS, N_IMPULSES), np.int64)  # column of (contact, kind), -1 if absent
@@ -154,7 +159,7 @@ def run_steps(q, u, ex_G, P_last, par, flags, ball, n_steps, step0, out, row0, s
         contact_gaps(q_M, R, ex_G, r, offsets, gaps)
         sin_beta = math.sqrt(R[0, 2] * R[0, 2] + R[1, 2] * R[1, 2])
         if pivot_contour == 1:
-            geo.contour_direction(R, sin_beta, contour)
+            geo.contour_direction(R, sin_beta, CONTOUR_SIN_BETA_REG, contour)
         nc = 0
         n_closed = 0
         for i in range(N_CONTACTS):
@@ -214,6 +219,12 @@ def run_steps(q, u, ex_G, P_last, par, flags, ball, n_steps, step0, out, row0, s
                     gs += W[j, l] * W[k, l] * m_inv[l]
                 delassus[j, k] = gs
                 delassus[k, j] = gs
+        # gains: r_j G_jj < 2 makes the sweep of one column contract; GAIN_CAP / G_jj keeps a margin. Inactive in
+        # ordinary steps (r_N G_NN ~ 1); it matters where a force direction grows without bound, e.g. the
+        # contour direction (3.64) ~ 1 / sin(beta) of a nearly flat disk. The solution does not depend on r.
+        for j in range(nc):
+            r_col[j] = min(gain[column_kind[j]], GAIN_CAP / delassus[j, j]) if delassus[j, j] > 0.0 \
+                else gain[column_kind[j]]
 
         # 4) fixed-point iteration (4.1)-(4.7)
         it = 0
@@ -238,20 +249,20 @@ def run_steps(q, u, ex_G, P_last, par, flags, ball, n_steps, step0, out, row0, s
                             sgm += delassus[j, k] * P[k]
                         gamma_E[kind] = sgm
                         xi[kind] = sgm + restitution[kind] * gamma_A[j]
-                    P_N = law.normal(P[jN], xi[IMPULSE_N], gain[IMPULSE_N])
+                    P_N = law.normal(P[jN], xi[IMPULSE_N], r_col[jN])
                     P_new[jN] = P_N
                     err += abs(P_N - P[jN])
                     jx, jy, jtau = column[i, IMPULSE_TX], column[i, IMPULSE_TY], column[i, IMPULSE_TAU]
+                    r_T = min(r_col[jx], r_col[jy])
                     if friction_law == COULOMB:
-                        px, py = law.coulomb(P[jx], P[jy], xi[IMPULSE_TX], xi[IMPULSE_TY], gain[IMPULSE_TX],
-                                             mu * P_N)
+                        px, py = law.coulomb(P[jx], P[jy], xi[IMPULSE_TX], xi[IMPULSE_TY], r_T, mu * P_N)
                     elif friction_law == SMOOTH:
                         G_TT = max(delassus[jx, jx], delassus[jy, jy])
                         px, py = law.smooth_coulomb(P[jx], P[jy], gamma_E[IMPULSE_TX], gamma_E[IMPULSE_TY], mu * P_N,
                                                     eps, G_TT)
                     else:
                         px, py, ptau = law.contensou(P[jx], P[jy], P[jtau], xi[IMPULSE_TX], xi[IMPULSE_TY],
-                                                     xi[IMPULSE_TAU], gain[IMPULSE_TX], mu * P_N, ball)
+                                                     xi[IMPULSE_TAU], min(r_T, r_col[jtau]), mu * P_N, ball)
                         P_new[jtau] = ptau
                         err += abs(ptau - P[jtau])
                     P_new[jx] = px
@@ -259,11 +270,11 @@ def run_steps(q, u, ex_G, P_last, par, flags, ball, n_steps, step0, out, row0, s
                     err += math.sqrt((px - P[jx]) ** 2 + (py - P[jy]) ** 2)
                     if pivot_contour == 1:
                         if friction_law != CONTENSOU:  # separate dry pivoting (2.30)
-                            ptau = law.interval(P[jtau], xi[IMPULSE_TAU], gain[IMPULSE_TAU], mu_tau * P_N)
+                            ptau = law.interval(P[jtau], xi[IMPULSE_TAU], r_col[jtau], mu_tau * P_N)
                             P_new[jtau] = ptau
                             err += abs(ptau - P[jtau])
                         jR = column[i, IMPULSE_R]
-                        pR = law.interval(P[jR], xi[IMPULSE_R], gain[IMPULSE_R], mu_R * P_N)  # (2.31)
+                        pR = law.interval(P[jR], xi[IMPULSE_R], r_col[jR], mu_R * P_N)  # (2.31)
                         P_new[jR] = pR
                         err += abs(pR - P[jR])
                 for j in range(nc):
