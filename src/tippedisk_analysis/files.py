@@ -1,0 +1,120 @@
+"""Output files: checked before any work starts, written under a unique temporary name, then renamed.
+
+Every file the package writes (datasets, sweep chunks, Moreau checkpoints, figures, animations)
+goes through :func:`atomic_write`: the content is written to ``.{name}.{pid}.{random}.part`` in
+the target directory, flushed to disk, and moved into place with :func:`os.replace`. A reader never
+sees a half-written file, an interrupted write leaves nothing behind, and two processes writing
+the same output both finish: the last rename wins.
+
+:func:`check_output` refuses, before a computation starts, what could only fail at its end:
+a path that is a directory or a device, a missing or unwritable directory, a file name netCDF
+cannot encode, or (unless ``overwrite``) an existing file.
+"""
+
+from __future__ import annotations
+
+import os
+import secrets
+import stat
+from collections.abc import Callable
+from pathlib import Path
+
+from .errors import OutputError
+
+PART_SUFFIX = ".part"
+
+
+def show(path: str | os.PathLike) -> str:
+    """``path`` printable in any terminal: bytes that are not UTF-8 shown as ``\\xNN``."""
+    return os.fsencode(os.fspath(path)).decode("utf-8", "backslashreplace")
+
+
+def utf8_encodable(path: str | os.PathLike) -> bool:
+    """True if ``path`` is valid UTF-8 (netCDF-C and HDF5 cannot open other names)."""
+    try:
+        os.fsencode(os.fspath(path)).decode("utf-8")
+    except UnicodeDecodeError:
+        return False
+    return True
+
+
+def temporary_name(path: str | os.PathLike) -> Path:
+    """A name unique to this process and call, next to ``path``: ``.{name}.{pid}.{random}.part``."""
+    path = Path(path)
+    return path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}{PART_SUFFIX}")
+
+
+def check_output(path: str | os.PathLike, *, overwrite: bool = True, netcdf: bool = True,
+                 option: str = "--output") -> Path:
+    """``path`` as a :class:`Path` if a file can be written there; else :class:`OutputError`.
+
+    Refused: a directory, a device / pipe / socket, a missing directory, a directory this process
+    cannot create files in (tested by creating one, so it holds for root and read-only mounts),
+    a name that is not UTF-8 (``netcdf``), and an existing file unless ``overwrite``.
+    ``option`` names the command-line option in the CLI wording of the message.
+    """
+    path = Path(path)
+    shown = show(path)
+    if netcdf and not utf8_encodable(path):
+        raise OutputError(f"'{shown}' is not valid UTF-8, which netCDF cannot write; choose a UTF-8 file name",
+                          cli=f"'{shown}' is not valid UTF-8, which netCDF cannot write; give {option} a UTF-8 name")
+    if path.is_dir():
+        raise OutputError(f"'{shown}' is a directory; give a file name, e.g. '{show(path / 'result.nc')}'",
+                          cli=f"'{shown}' is a directory; give {option} a file name, e.g. "
+                              f"'{show(path / 'result.nc')}'")
+    if path.exists() or path.is_symlink():
+        mode = os.stat(path).st_mode if path.exists() else 0
+        if not stat.S_ISREG(mode):
+            raise OutputError(f"'{shown}' is not a regular file (a device, pipe, socket or broken link); "
+                              "choose a file name", cli=f"'{shown}' is not a regular file (a device, pipe, socket "
+                                                         f"or broken link); give {option} a file name")
+        if not overwrite:
+            raise OutputError(f"'{shown}' exists; pass overwrite=True to replace it, or choose another name",
+                              cli=f"'{shown}' exists; give --overwrite to replace it, or another {option}")
+    parent = path.parent
+    if not parent.is_dir():
+        raise OutputError(f"directory '{show(parent)}' does not exist; create it or choose another path",
+                          cli=f"directory '{show(parent)}' does not exist; create it or give another {option}")
+    probe = temporary_name(path.with_name("probe"))
+    try:
+        fd = os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+    except OSError as exc:
+        reason = exc.strerror or exc.__class__.__name__
+        raise OutputError(f"cannot create files in '{show(parent)}' ({reason}); choose another directory",
+                          cli=f"cannot create files in '{show(parent)}' ({reason}); give another {option}") from None
+    os.close(fd)
+    os.unlink(probe)
+    return path
+
+
+def atomic_write(path: str | os.PathLike, write: Callable[[Path], None]) -> Path:
+    """Call ``write(tmp)`` to fill a temporary file next to ``path``, flush it, rename it to ``path``.
+
+    The temporary file is removed whatever happens (errors, Ctrl-C). A failing write raises
+    :class:`OutputError` naming the path and the operating system's reason.
+    """
+    path = Path(path)
+    if path.exists() and not path.is_file():  # never replace a device or a directory entry of another kind
+        raise OutputError(f"'{show(path)}' is not a regular file (a directory, device, pipe or socket); "
+                          "choose a file name")
+    tmp = temporary_name(path)
+    try:
+        write(tmp)
+        fd = os.open(tmp, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+        os.replace(tmp, path)
+    except OSError as exc:
+        reason = exc.strerror or str(exc) or exc.__class__.__name__
+        raise OutputError(f"cannot write '{show(path)}' ({reason}); check the disk space and the directory's "
+                          "permissions, or choose another path") from None
+    finally:
+        try:
+            os.unlink(tmp)
+        except FileNotFoundError:
+            pass
+        except OSError:  # pragma: no cover - e.g. the directory vanished
+            pass
+    return path
