@@ -15,14 +15,18 @@ as critical without refinement.
 from __future__ import annotations
 
 import dataclasses
+import sys
 
 import heyoka as hy
 import numpy as np
 import xarray as xr
 from scipy.optimize import brentq
+from tqdm import tqdm
 
 from ..defaults import CRITICAL_RTOL, EIG_ATOL, EIG_RTOL, SLIP_SMOOTHING
-from ..errors import ParameterError
+from ..errors import Interrupted
+from ..ranges import check_axis
+from ..resources import check_memory
 from ..models import ode
 from ..parameters import Setup, to_dict
 from ..results import make_attrs
@@ -31,6 +35,11 @@ from . import stationary as st
 
 BRANCH_NAMES = tuple(st.BRANCHES)
 CRITICAL_PAD = -1.0e30  # padding of omega_critical beyond n_critical (not a _FillValue: never masked to NaN)
+STABILITY_BLOCK = 32_768
+"""Grid points evaluated per call of the compiled Jacobian (~50 MB of working memory)."""
+BYTES_PER_POINT = 900.0
+"""Memory per grid point (both branches): the dataset (~250 B), the parameter vectors (~100 B) and the
+copies of the netCDF encoding; 3000 x 3000 points need about 8 GB (measured peak 7 GB)."""
 SWEEPABLE = {"eps": ("m s-1", "smoothing velocity eps of the regularised Coulomb law (2.29)"),
              "mu": ("1", "friction coefficient mu (2.29)"),
              "e": ("m", "eccentricity e = |r_GS| of the centre of gravity")}
@@ -59,13 +68,16 @@ def _parameter_grid(setup: Setup, sweeps: dict, slip_smoothing: float, shape) ->
 
 
 def stability_map(omega, eps, *, mu=None, e=None, setup: Setup | None = None,
-                  slip_smoothing: float = SLIP_SMOOTHING, critical: bool = True) -> xr.Dataset:
+                  slip_smoothing: float = SLIP_SMOOTHING, critical: bool = True, progress: bool = True) -> xr.Dataset:
     """Eigenvalue stability of both spinning branches on the grid omega x eps (x mu x e).
 
     omega [rad/s] and eps [m/s]: 1-D arrays (dims of the result); mu [-] and e [m]: None
     (take ``setup``'s value, default Tables 1-2) or 1-D arrays (further dims). Returns a
     Dataset with dims (branch, omega, eps[, mu][, e], eig) and, if ``critical``, the critical
     spin speeds ``omega_critical`` (branch, eps[, mu][, e], crossing) with ``n_critical``.
+    The grid is evaluated in blocks of ``STABILITY_BLOCK`` points (bounded working memory, a
+    progress bar on stderr for long maps); the result's memory is estimated first and a map
+    that cannot fit is refused (ResourceError).
     """
     setup = setup or Setup()
     omega = _as_axis(omega, "omega")
@@ -76,45 +88,70 @@ def stability_map(omega, eps, *, mu=None, e=None, setup: Setup | None = None,
     for name, values in sweeps.items():
         _validated(setup, name, values)
     shape = (len(omega), *(len(v) for v in sweeps.values()))
+    n = int(np.prod(shape, dtype=float))
+    check_memory(n * BYTES_PER_POINT, f"a stability map of {n:,} points per branch",
+                 "use fewer grid points (smaller N)")
     pars = _parameter_grid(setup, sweeps, slip_smoothing, shape)
     om_flat = np.broadcast_to(omega.reshape(-1, *([1] * len(sweeps))), shape).ravel()
 
     dims = ("omega", *sweeps)
-    fields = {k: [] for k in ("eig_real", "eig_imag", "max_real_eig", "n_unstable", "stability", "lambda_N",
-                              "residual")}
-    for branch in BRANCH_NAMES:
-        x = st.stationary_state(branch, om_flat)
-        spec = stability.spectrum(branch, om_flat, pars)
-        ev = reduced.evaluate(x, pars)
-        fields["eig_real"].append(spec.eigenvalues.real.reshape(*shape, stability.N_EIG))
-        fields["eig_imag"].append(spec.eigenvalues.imag.reshape(*shape, stability.N_EIG))
-        fields["max_real_eig"].append(spec.max_real_eig.reshape(shape))
-        fields["n_unstable"].append(spec.n_unstable.reshape(shape))
-        fields["stability"].append(spec.stability.reshape(shape))
-        fields["lambda_N"].append(ev["lambda_N"].reshape(shape))
-        fields["residual"].append(np.max(np.abs(ev["rhs"]), axis=0).reshape(shape))
+    nb = len(BRANCH_NAMES)
+    fields = {"eig_real": np.empty((nb, n, stability.N_EIG)), "eig_imag": np.empty((nb, n, stability.N_EIG)),
+              "max_real_eig": np.empty((nb, n)), "n_unstable": np.empty((nb, n), dtype=np.int32),
+              "stability": np.empty((nb, n), dtype=np.int8), "lambda_N": np.empty((nb, n)),
+              "residual": np.empty((nb, n))}
+    bar = tqdm(total=nb * n, unit="point", desc="stability map", file=sys.stderr, delay=2.0,
+               disable=not progress, dynamic_ncols=True)
+    done = 0
+    try:
+        for b, branch in enumerate(BRANCH_NAMES):
+            for s0 in range(0, n, STABILITY_BLOCK):
+                s1 = min(n, s0 + STABILITY_BLOCK)
+                x = st.stationary_state(branch, om_flat[s0:s1])
+                spec = stability.spectrum(branch, om_flat[s0:s1], pars[:, s0:s1])
+                ev = reduced.evaluate(x, pars[:, s0:s1])
+                fields["eig_real"][b, s0:s1] = spec.eigenvalues.real
+                fields["eig_imag"][b, s0:s1] = spec.eigenvalues.imag
+                fields["max_real_eig"][b, s0:s1] = spec.max_real_eig
+                fields["n_unstable"][b, s0:s1] = spec.n_unstable
+                fields["stability"][b, s0:s1] = spec.stability
+                fields["lambda_N"][b, s0:s1] = ev["lambda_N"]
+                fields["residual"][b, s0:s1] = np.max(np.abs(ev["rhs"]), axis=0)
+                done += s1 - s0
+                bar.update(s1 - s0)
+    except KeyboardInterrupt:
+        raise Interrupted(f"interrupted after {done:,} of {nb * n:,} points; nothing stored (a stability map is "
+                          "computed in memory in one go: rerun to start again, or use a smaller grid)",
+                          stored=0, total=nb * n) from None
+    finally:
+        bar.close()
+    del pars
+    for key in ("eig_real", "eig_imag"):
+        fields[key] = fields[key].reshape(nb, *shape, stability.N_EIG)
+    for key in ("max_real_eig", "n_unstable", "stability", "lambda_N", "residual"):
+        fields[key] = fields[key].reshape(nb, *shape)
 
     bdims = ("branch", *dims)
     ds = xr.Dataset(
         {
-            "eig_real": ((*bdims, "eig"), np.stack(fields["eig_real"]), {
+            "eig_real": ((*bdims, "eig"), fields["eig_real"], {
                 "units": "s-1", "long_name": "real part of the nontrivial eigenvalues of the reduced Jacobian",
                 "comment": "sorted by real part, descending; the structural zero of the spin family is excluded"}),
-            "eig_imag": ((*bdims, "eig"), np.stack(fields["eig_imag"]), {
+            "eig_imag": ((*bdims, "eig"), fields["eig_imag"], {
                 "units": "rad s-1",
                 "long_name": "imaginary part of the nontrivial eigenvalues of the reduced Jacobian"}),
-            "max_real_eig": (bdims, np.stack(fields["max_real_eig"]), {
+            "max_real_eig": (bdims, fields["max_real_eig"], {
                 "units": "s-1", "long_name": "largest real part of the nontrivial eigenvalues (growth rate)"}),
-            "n_unstable": (bdims, np.stack(fields["n_unstable"]).astype(np.int32), {
+            "n_unstable": (bdims, fields["n_unstable"], {
                 "units": "1", "long_name": "number of eigenvalues with real part above the tolerance"}),
-            "stability": (bdims, np.stack(fields["stability"]).astype(np.int8), {
+            "stability": (bdims, fields["stability"], {
                 "long_name": "linear stability of the stationary solution",
                 "flag_values": np.array(list(stability.STABILITY_FLAGS.values()), dtype=np.int8),
                 "flag_meanings": " ".join(stability.STABILITY_FLAGS),
                 "comment": f"tolerance on real parts: {EIG_ATOL:g} s-1 + {EIG_RTOL:g} * max |eigenvalue|"}),
-            "lambda_N": (bdims, np.stack(fields["lambda_N"]), {
+            "lambda_N": (bdims, fields["lambda_N"], {
                 "units": "N", "long_name": "normal contact force at C1 of the stationary solution"}),
-            "residual": (bdims, np.stack(fields["residual"]), {
+            "residual": (bdims, fields["residual"], {
                 "units": "1", "long_name": "max |right-hand side| of the reduced system at the stationary solution",
                 "comment": "mixed units (rad s-1, m s-2, rad s-2); round-off level: the Jacobian times the "
                            "rounding of pi/2 (cos(pi/2) = 6e-17 in double precision)"}),
@@ -153,12 +190,7 @@ def stability_map(omega, eps, *, mu=None, e=None, setup: Setup | None = None,
 
 
 def _as_axis(values, name: str) -> np.ndarray:
-    arr = np.atleast_1d(np.asarray(values, dtype=float))
-    if arr.ndim != 1 or arr.size == 0 or not np.all(np.isfinite(arr)):
-        raise ParameterError(f"{name} must be a non-empty 1-D array of finite numbers")
-    if arr.size > 1 and np.any(np.diff(arr) <= 0):
-        raise ParameterError(f"{name} values must increase strictly; give START < STOP")
-    return arr
+    return check_axis(values, name)
 
 
 def _range_config(values: np.ndarray) -> dict:

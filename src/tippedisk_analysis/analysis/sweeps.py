@@ -2,43 +2,60 @@
 
 Generic: a :class:`Sweep` says how to compute the points [start, stop) of a flattened grid
 (a module-level function of a plain-data configuration, so a dask worker can run it) and how to
-assemble the merged results into a dataset. Outcome maps (:mod:`.outcome_map`) are one such sweep.
+assemble the merged results into a dataset. Outcome maps (:mod:`.outcome_map`) and brute-force
+bifurcation diagrams (:mod:`.bifurcation`) are such sweeps.
 
-The flattened grid is cut into chunks of ``chunk_size`` points. Each finished chunk
-is written by the calling process to ``<output>.chunks/chunk_NNNNN.nc`` (temporary file +
-atomic rename), next to ``config.json``. A rerun of the same command reads the finished
-chunks and computes only the missing ones; a different configuration is refused. A killed
-run loses only the chunks in flight. At the end the chunks are merged into ``output``
-(atomically) and the chunk directory is removed.
+The flattened grid is cut into chunks of ``chunk_size`` points. Each finished chunk is written
+by the calling process to ``<output>.chunks/chunk_NNNNN.nc`` (:func:`..files.atomic_write`: a unique
+temporary name, then a rename), next to ``config.json``; every chunk also records a hash of the
+configuration. A rerun of the same command reads the finished chunks and computes only the missing
+ones; a damaged chunk is recomputed with a :class:`TippediskWarning`. A chunk directory of another
+configuration is refused (``overwrite=True`` discards it), unless it holds no chunk at all.
+Ctrl-C raises :class:`~tippedisk_analysis.errors.Interrupted` saying how many chunks are stored; a
+killed run loses only the chunks in flight. At the end the chunks are merged into ``output``
+(atomically) and the chunk directory is removed. Two processes computing the same output share
+the finished chunks they find at their start, both finish, and the last one's rename wins.
+
+Before any work, the memory of the merged result is estimated (``bytes_per_point``) and a sweep
+that cannot fit is refused (:func:`tippedisk_analysis.resources.check_memory`). At most two chunks
+per worker are queued at a time, so the bookkeeping does not grow with the grid.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import shutil
 import sys
+import warnings
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor, as_completed
+from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
-from ..errors import ParameterError
+from .. import files, resources
+from ..errors import Interrupted, ParameterError, TippediskWarning
 
 CHUNK_PATTERN = "chunk_{:05d}.nc"
+IN_FLIGHT_PER_WORKER = 2  # chunks queued per worker: enough to keep it busy, bounded for huge grids
+MERGE_FACTOR = 3.0  # copies of the result alive at the merge: stored chunks, concatenation, dataset / encoding
 
 
 @dataclass(frozen=True)
 class Sweep:
     """A grid computed chunk by chunk.
 
-    ``run_chunk(config, start, stop)`` returns {variable: array over the points [start, stop)};
-    it must be a module-level function (dask pickles it by reference) and deterministic.
-    ``assemble(results)`` turns the merged {variable: array over all points} into the dataset.
+    ``run_chunk(config, start, stop)`` returns {variable: array whose first axis runs over the
+    points [start, stop)} (or, for ragged results, any 1-D arrays: they are concatenated in chunk
+    order); it must be a module-level function (dask pickles it by reference) and deterministic.
+    ``assemble(results)`` turns the merged {variable: array} into the dataset.
     ``warm_up()`` compiles what the threads share, once, before they start.
+    ``bytes_per_point`` (result memory) and ``seconds_per_point`` (work on one core) are estimates
+    used to refuse what cannot fit and to announce long work.
     """
 
     name: str  # progress-bar label, e.g. "outcome map"
@@ -50,6 +67,8 @@ class Sweep:
     assemble: Callable[[dict], xr.Dataset]
     warm_up: Callable[[], object] | None = None
     unit: str = "run"
+    bytes_per_point: float = 0.0
+    seconds_per_point: float = 0.0
 
 
 def chunk_bounds(sweep: Sweep) -> list[tuple[int, int]]:
@@ -62,51 +81,122 @@ def chunk_dir(output: str | os.PathLike) -> Path:
     return output.with_name(output.name + ".chunks")
 
 
-def _prepare_dir(sweep: Sweep, output) -> Path:
+def config_hash(config: dict) -> str:
+    return hashlib.sha256(json.dumps(config, sort_keys=True).encode()).hexdigest()[:16]
+
+
+def stored_chunks(d: Path) -> list[Path]:
+    return sorted(d.glob("chunk_*.nc")) if d.is_dir() else []
+
+
+def estimate(sweep: Sweep, workers: int = 1) -> tuple[float, float]:
+    """(bytes of the merged result at its peak, wall seconds on ``workers`` cores) of the whole sweep."""
+    return MERGE_FACTOR * sweep.n_points * sweep.bytes_per_point, sweep.n_points * sweep.seconds_per_point / workers
+
+
+def check_resources(sweep: Sweep, workers: int = 1) -> None:
+    """Refuse (:class:`ResourceError`) a sweep whose merged result cannot fit in memory."""
+    needed, _ = estimate(sweep, workers)
+    resources.check_memory(
+        needed, f"{sweep.name} of {sweep.n_points:,} {sweep.unit}s",
+        "use fewer grid points (smaller N), or split it into several outputs along one axis")
+
+
+def _write_config(d: Path, cfg: str) -> None:
+    files.atomic_write(d / "config.json", lambda tmp: Path(tmp).write_text(cfg))
+
+
+def _prepare_dir(sweep: Sweep, output, overwrite: bool = False) -> tuple[Path, bool]:
+    """The chunk directory for ``sweep`` (created if missing); True if this call created it."""
     d = chunk_dir(output)
     cfg = json.dumps(sweep.config, sort_keys=True)
     cfg_file = d / "config.json"
     if d.exists():
-        if not cfg_file.is_file() or json.loads(cfg_file.read_text()) != json.loads(cfg):
-            raise ParameterError(
-                f"{d} holds chunks of a different {sweep.name} configuration; rerun the original command "
-                f"to resume it, or delete {d} (or choose another --output) to start this one")
-    else:
-        if not d.parent.is_dir():
-            raise ParameterError(f"directory {str(d.parent)!r} does not exist; create it or choose another --output")
-        d.mkdir()
-        tmp = d / "config.json.part"
-        tmp.write_text(cfg)
-        os.replace(tmp, cfg_file)
-    return d
+        try:
+            same = json.loads(cfg_file.read_text()) == json.loads(cfg)
+        except (OSError, ValueError):
+            same = False
+        if not same:
+            if stored_chunks(d) and not overwrite:
+                shown = files.show(d)
+                raise ParameterError(
+                    f"'{shown}' holds chunks of a different {sweep.name} configuration; resume it with its "
+                    f"original settings, pass overwrite=True to discard it, or choose another output",
+                    cli=f"'{shown}' holds chunks of a different {sweep.name} configuration; rerun the original "
+                        f"command to resume it, give --overwrite to discard it, or give another --output")
+            shutil.rmtree(d, ignore_errors=True)  # only a config.json (or overwrite): nothing to lose
+        else:
+            return d, False
+    if not d.parent.is_dir():
+        raise ParameterError(f"directory '{files.show(d.parent)}' does not exist; create it or choose another output")
+    d.mkdir(exist_ok=True)
+    _write_config(d, cfg)
+    return d, True
 
 
-def _write_chunk(d: Path, index: int, start: int, stop: int, res: dict) -> None:
-    ds = xr.Dataset({k: ("point", np.asarray(v)) for k, v in res.items()},
-                    attrs={"start": start, "stop": stop})
-    path = d / CHUNK_PATTERN.format(index)
-    tmp = path.with_name(path.name + ".part")
-    ds.to_netcdf(tmp, engine="netcdf4")
-    os.replace(tmp, path)
+def _write_chunk(d: Path, index: int, start: int, stop: int, res: dict, cfg_hash: str, cfg: str) -> None:
+    data = {}
+    for k, v in res.items():
+        v = np.asarray(v)
+        data[k] = (tuple(f"{k}_{axis}" for axis in range(v.ndim)), v)
+    ds = xr.Dataset(data, attrs={"start": start, "stop": stop, "config_hash": cfg_hash})
+    for attempt in (0, 1):
+        try:
+            if not d.is_dir():  # removed by a concurrent run that finished first: recreate it
+                d.mkdir(exist_ok=True)
+                _write_config(d, cfg)
+            files.atomic_write(d / CHUNK_PATTERN.format(index), lambda tmp: ds.to_netcdf(tmp, engine="netcdf4"))
+            return
+        except Exception:  # noqa: BLE001 - a concurrent removal of the directory mid-write; retry once
+            if attempt:
+                raise
 
 
-def _read_chunk(path: Path, start: int, stop: int, variables) -> dict | None:
+def _read_chunk(path: Path, start: int, stop: int, variables, cfg_hash: str) -> dict | None:
+    """The results stored in ``path``; None (with a warning) if it is damaged or belongs elsewhere."""
     try:
         with xr.open_dataset(path, engine="netcdf4") as ds:
-            if int(ds.attrs["start"]) != start or int(ds.attrs["stop"]) != stop:
-                return None
-            return {k: ds[k].values.copy() for k in variables}
-    except Exception:  # damaged or foreign file: recompute it
-        return None
+            stored_hash = ds.attrs.get("config_hash", cfg_hash)
+            if int(ds.attrs["start"]) != start or int(ds.attrs["stop"]) != stop or stored_hash != cfg_hash:
+                reason = "belongs to another configuration or chunk size"
+            else:
+                return {k: ds[k].values.copy() for k in variables}
+    except Exception as exc:  # noqa: BLE001 - damaged or foreign file: recompute it
+        reason = f"is damaged ({exc.__class__.__name__})"
+    warnings.warn(f"chunk '{files.show(path)}' {reason}; recomputing it", TippediskWarning, stacklevel=2)
+    return None
+
+
+def parse_scheduler(scheduler: str) -> tuple[str, int | None]:
+    """("local", N) for ``local`` / ``local:N``, else ("address", None); ParameterError for a bad N."""
+    text = str(scheduler).strip()
+    if text == "local" or text.startswith("local:"):
+        count = text.partition(":")[2]
+        if not count:
+            return "local", os.cpu_count() or 1
+        try:
+            n = int(count)
+        except ValueError:
+            n = 0
+        if n < 1:
+            raise ParameterError(f"scheduler {text!r}: local:N needs N >= 1 worker processes; give e.g. local:2",
+                                 cli=f"--scheduler {text!r}: local:N needs N >= 1 worker processes; give e.g. "
+                                     "--scheduler local:2")
+        return "local", n
+    if not text:
+        raise ParameterError("scheduler is empty; give a dask scheduler address (tcp://host:8786) or local:N")
+    return "address", None
 
 
 def _client(scheduler: str):
+    kind, n = parse_scheduler(scheduler)
     try:
         from distributed import Client, LocalCluster
     except ImportError:  # pragma: no cover
-        raise ParameterError("--scheduler needs dask.distributed; pip install 'dask[distributed]'") from None
-    if scheduler.startswith("local"):
-        n = int(scheduler.partition(":")[2] or os.cpu_count() or 1)
+        raise ParameterError("a scheduler needs dask.distributed; pip install 'dask[distributed]'") from None
+    if kind == "local":
+        resources.check_memory(n * resources.WORKER_BYTES, f"a local dask cluster of {n} worker processes",
+                               f"use fewer workers (local:{os.cpu_count() or 1} uses every core)")
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
         return Client(cluster), cluster
     try:
@@ -117,20 +207,29 @@ def _client(scheduler: str):
 
 
 def run_sweep(sweep: Sweep, *, output=None, scheduler=None, threads: int | None = None,
-              progress: bool = True, on_chunk=None) -> xr.Dataset:
+              progress: bool = True, on_chunk=None, overwrite: bool = False) -> xr.Dataset:
     """Run (or resume) the sweep and return the merged dataset; write it to ``output`` if given.
 
     ``scheduler``: None -> a thread pool of ``threads`` workers in this process; an object with
     ``submit`` (a dask ``Client``); ``"local:N"`` -> a temporary dask LocalCluster of N
     processes; any other string -> the address of a dask scheduler.
     ``on_chunk(index)`` is called after each newly computed chunk is stored (tests, logging).
+    ``overwrite``: discard a chunk directory of another configuration (the output file itself is
+    always replaced at the end).
     """
+    if threads is not None and (int(threads) != threads or threads < 1):
+        raise ParameterError(f"threads = {threads!r} must be a positive integer")
+    if scheduler is not None and not hasattr(scheduler, "submit"):
+        parse_scheduler(str(scheduler))  # a bad local:N is refused before anything starts
+    check_resources(sweep)
+    if output is not None:
+        output = files.check_output(output, overwrite=True)
     bounds = chunk_bounds(sweep)
     client, cluster = None, None
     if scheduler is not None:  # connect first: a bad address leaves nothing behind
         client, cluster = (scheduler, None) if hasattr(scheduler, "submit") else _client(str(scheduler))
     try:
-        return _run(sweep, bounds, output, client, threads, progress, on_chunk)
+        return _run(sweep, bounds, output, client, threads, progress, on_chunk, overwrite)
     finally:
         if client is not None and client is not scheduler:
             client.close()
@@ -138,26 +237,31 @@ def run_sweep(sweep: Sweep, *, output=None, scheduler=None, threads: int | None 
             cluster.close()
 
 
-def _run(sweep: Sweep, bounds, output, client, threads, progress, on_chunk) -> xr.Dataset:
+def _run(sweep: Sweep, bounds, output, client, threads, progress, on_chunk, overwrite) -> xr.Dataset:
     from tqdm import tqdm
 
-    d = _prepare_dir(sweep, output) if output is not None else None
+    cfg = json.dumps(sweep.config, sort_keys=True)
+    cfg_hash = config_hash(sweep.config)
+    d, created = _prepare_dir(sweep, output, overwrite) if output is not None else (None, False)
     results: dict[int, dict] = {}
     if d is not None:
         for i, (s, e) in enumerate(bounds):
             p = d / CHUNK_PATTERN.format(i)
             if p.is_file():
-                r = _read_chunk(p, s, e, sweep.variables)
+                r = _read_chunk(p, s, e, sweep.variables, cfg_hash)
                 if r is not None:
                     results[i] = r
     todo = [i for i in range(len(bounds)) if i not in results]
+    workers = 1 if client is not None else (threads or min(len(todo), os.cpu_count() or 1) or 1)
+    _announce(sweep, sum(bounds[i][1] - bounds[i][0] for i in todo), workers, progress)
     bar = tqdm(total=sweep.n_points, initial=sum(bounds[i][1] - bounds[i][0] for i in results), unit=sweep.unit,
                desc=sweep.name, file=sys.stderr, delay=2.0, disable=not progress, dynamic_ncols=True)
+    n_resumed = len(results)
 
     def store(i, res):
         results[i] = res
         if d is not None:
-            _write_chunk(d, i, *bounds[i], res)
+            _write_chunk(d, i, *bounds[i], res, cfg_hash, cfg)
         bar.update(bounds[i][1] - bounds[i][0])
         if on_chunk is not None:
             on_chunk(i)
@@ -166,29 +270,15 @@ def _run(sweep: Sweep, bounds, output, client, threads, progress, on_chunk) -> x
         if client is None:
             if todo and sweep.warm_up is not None:
                 sweep.warm_up()  # compile once, before the threads start
-            with ThreadPoolExecutor(max_workers=threads or min(len(todo), os.cpu_count() or 1) or 1) as ex:
-                futures = {ex.submit(sweep.run_chunk, sweep.config, *bounds[i]): i for i in todo}
-                try:
-                    for fut in as_completed(futures):
-                        store(futures[fut], fut.result())
-                except BaseException:  # Ctrl-C or an error: drop queued chunks, keep the stored ones
-                    for fut in futures:
-                        fut.cancel()
-                    raise
+            _run_threads(sweep, bounds, todo, workers, store)
         else:
-            from distributed import as_completed as dask_completed
-
-            # plain data: workers rebuild the configuration and compile their own kernel
-            futures = {client.submit(sweep.run_chunk, sweep.config, *bounds[i], pure=False): i for i in todo}
-            try:
-                for fut in dask_completed(list(futures)):
-                    store(futures[fut], fut.result())
-            except BaseException:
-                client.cancel(list(futures))
-                raise
+            _run_dask(sweep, bounds, todo, client, store)
+    except KeyboardInterrupt:
+        bar.close()
+        raise _interrupted(sweep, d, created, len(results), len(bounds), n_resumed) from None
     finally:
         bar.close()
-    merged = {k: np.concatenate([results[i][k] for i in range(len(bounds))]) for k in sweep.variables}
+    merged = {k: np.concatenate([np.asarray(results[i][k]) for i in range(len(bounds))]) for k in sweep.variables}
     ds = sweep.assemble(merged)
     if output is not None:
         from ..results import save
@@ -196,3 +286,82 @@ def _run(sweep: Sweep, bounds, output, client, threads, progress, on_chunk) -> x
         save(ds, output)
         shutil.rmtree(d, ignore_errors=True)
     return ds
+
+
+def _announce(sweep: Sweep, n_todo: int, workers: int, progress: bool) -> None:
+    """One line on stderr before long work (estimated from ``seconds_per_point``)."""
+    seconds = n_todo * sweep.seconds_per_point / max(workers, 1)
+    if progress and seconds > 600:
+        print(f"{sweep.name}: {n_todo:,} {sweep.unit}s, about {resources.human_time(seconds)} on {workers} "
+              "worker(s) (estimate); finished chunks are stored, Ctrl-C and the same call resume",
+              file=sys.stderr)
+
+
+def _interrupted(sweep: Sweep, d: Path | None, created: bool, n_stored: int, n_total: int,
+                 n_resumed: int) -> Interrupted:
+    if d is None:
+        return Interrupted(f"interrupted; {n_stored} of {n_total} chunks computed, nothing stored (no output given)",
+                           stored=0, total=n_total)
+    if not stored_chunks(d):  # nothing to resume: leave no directory behind to block another configuration
+        if created:
+            shutil.rmtree(d, ignore_errors=True)
+        return Interrupted(f"interrupted; 0 of {n_total} chunks stored, nothing to resume", stored=0, total=n_total)
+    n_files = len(stored_chunks(d))
+    return Interrupted(f"interrupted; {n_files} of {n_total} chunks stored in '{files.show(d)}'; "
+                       "rerun the same command to resume", stored=n_files, total=n_total)
+
+
+def _run_threads(sweep: Sweep, bounds, todo, workers: int, store) -> None:
+    pending: dict = {}
+    queue = iter(todo)
+    ex = ThreadPoolExecutor(max_workers=workers)
+
+    def fill():
+        while len(pending) < IN_FLIGHT_PER_WORKER * workers:
+            i = next(queue, None)
+            if i is None:
+                return
+            pending[ex.submit(sweep.run_chunk, sweep.config, *bounds[i])] = i
+
+    try:
+        fill()
+        while pending:
+            done, _ = wait(pending, return_when=FIRST_COMPLETED)
+            for fut in sorted(done, key=pending.get):
+                store(pending.pop(fut), fut.result())
+            fill()
+    except BaseException:  # Ctrl-C or an error: drop queued chunks, keep the stored ones, do not wait
+        ex.shutdown(wait=False, cancel_futures=True)
+        raise
+    ex.shutdown(wait=True)
+
+
+def _run_dask(sweep: Sweep, bounds, todo, client, store) -> None:
+    from distributed import as_completed as dask_completed
+
+    # plain data: workers rebuild the configuration and compile their own kernel
+    n_workers = max(1, len(getattr(client, "scheduler_info", lambda: {})().get("workers", {})) or 1)
+    queue = iter(todo)
+    pending: dict = {}
+
+    def submit():
+        i = next(queue, None)
+        if i is None:
+            return None
+        fut = client.submit(sweep.run_chunk, sweep.config, *bounds[i], pure=False)
+        pending[fut] = i
+        return fut
+
+    first = [f for f in (submit() for _ in range(IN_FLIGHT_PER_WORKER * n_workers + 1)) if f is not None]
+    if not first:
+        return
+    completed = dask_completed(first)
+    try:
+        for fut in completed:
+            store(pending.pop(fut), fut.result())
+            nxt = submit()
+            if nxt is not None:
+                completed.add(nxt)
+    except BaseException:
+        client.cancel(list(pending))
+        raise

@@ -16,9 +16,12 @@ from dataclasses import dataclass
 
 import xarray as xr
 
+from .. import defaults
 from ..errors import ParameterError, UnknownModelError
 from ..parameters import InitialState, Setup
+from ..resources import check_memory
 from . import moreau
+from .moreau.models import QUATERNION
 
 
 @dataclass(frozen=True)
@@ -67,9 +70,28 @@ def simulate(model: str = "ode-euler", t_end: float = 5.0, *, setup: Setup | Non
     t_end [s]; further options depend on the model (e.g. ``dt_output``, ``tol``).
     Returns an ``xarray.Dataset`` on an output time grid, with ``status`` and ``message``.
     """
+    if not isinstance(model, str):
+        raise ParameterError(f"model = {model!r} is a {type(model).__name__}; give a model name such as 'ode-euler' "
+                             "or 'm6' (tippedisk_analysis.model_names() lists them)")
     info = resolve(model)
-    if not (isinstance(t_end, int | float) and math.isfinite(t_end) and t_end > 0):
+    if not (isinstance(t_end, int | float) and not isinstance(t_end, bool) and math.isfinite(t_end) and t_end > 0):
         raise ParameterError(f"t_end = {t_end!r} s must be a positive number; give t_end > 0")
+    setup = Setup() if setup is None else setup
+    initial = InitialState() if initial is None else initial
+    if not isinstance(setup, Setup):
+        raise ParameterError(f"setup must be a Setup, not {type(setup).__name__}; give e.g. "
+                             "Setup(disk=Disk(), friction=Friction(mu=0.3)) (tippedisk_analysis.Setup)")
+    if not isinstance(initial, InitialState):
+        raise ParameterError(f"initial must be an InitialState, not {type(initial).__name__}; give e.g. "
+                             "InitialState(alpha_dot=40.0) (tippedisk_analysis.InitialState)")
+    if options.get("normalize_quaternion") and info.name not in moreau.MODELS:
+        raise ParameterError(f"normalize_quaternion applies to the Moreau quaternion models ({_quaternion_names()}); "
+                             f"{info.name} has no quaternion drift to correct", cli=f"--normalize-quaternion applies to "
+                             f"the Moreau quaternion models ({_quaternion_names()}); drop it for {info.name}")
+    if options.get("normalize_quaternion") and moreau.MODELS[info.name].parameterization != QUATERNION:
+        raise ParameterError(f"normalize_quaternion applies to the Moreau quaternion models ({_quaternion_names()}); "
+                             f"{info.name} uses Euler angles", cli=f"--normalize-quaternion applies to the Moreau "
+                             f"quaternion models ({_quaternion_names()}); {info.name} uses Euler angles: drop it")
     unknown = set(options) - set(info.options)
     if unknown:
         raise ParameterError(f"model {info.name!r} takes no option(s) {sorted(unknown)}; "
@@ -77,7 +99,35 @@ def simulate(model: str = "ode-euler", t_end: float = 5.0, *, setup: Setup | Non
     _check_positive(options, ("dt_output", "tol", "slip_smoothing", "dt"))
     if "tol" in options and not options["tol"] < 1:
         raise ParameterError(f"tol = {options['tol']!r} must lie in (0, 1); give e.g. 1e-14 (ODE) or 1e-8 (Moreau)")
-    return info.run(setup or Setup(), initial or InitialState(), float(t_end), **options)
+    _check_memory(info, float(t_end), options)
+    return info.run(setup, initial, float(t_end), **options)
+
+
+BYTES_PER_SAMPLE = {"ode": 1200.0, "moreau": 2500.0}
+"""Memory per stored sample: the raw rows or states, the schema variables (30-80 doubles) and their
+copies in the dataset and the netCDF encoding (measured ~4x the dataset)."""
+
+
+def estimate_samples(info: ModelInfo, t_end: float, options: dict) -> float:
+    """Samples a run stores (ODE: t_end / dt_output; Moreau: steps / store_every)."""
+    if info.name in moreau.MODELS:
+        dt = options.get("dt", defaults.MOREAU_DT)
+        store_every = options.get("store_every") or max(1, int(round(defaults.MOREAU_STORE_INTERVAL / dt)))
+        return math.floor(t_end / dt) / store_every + 1
+    return t_end / options.get("dt_output", 1e-3) + 2
+
+
+def _check_memory(info: ModelInfo, t_end: float, options: dict) -> None:
+    kind = "moreau" if info.name in moreau.MODELS else "ode"
+    n = estimate_samples(info, t_end, options)
+    finer = "store_every" if kind == "moreau" else "dt_output"
+    check_memory(n * BYTES_PER_SAMPLE[kind], f"the {info.name} run storing {n:,.0f} samples",
+                 f"use a shorter t_end or a coarser sampling (a larger {finer})",
+                 cli_fix=f"use a shorter --t-end or a coarser sampling (a larger --{finer.replace('_', '-')})")
+
+
+def _quaternion_names() -> str:
+    return ", ".join(f"m{m.number}" for m in moreau.MODELS.values() if m.parameterization == QUATERNION)
 
 
 def _check_positive(options: dict, names) -> None:
