@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from . import files
 from .errors import DatasetError
 from .version import __version__
 
@@ -121,7 +122,11 @@ def flat_parameters(setup) -> dict:
     flat = {"gravity": setup.gravity}
     for group in ("disk", "friction"):
         for key, value in dataclasses.asdict(getattr(setup, group)).items():
-            flat[f"{group}_{key}"] = value
+            if isinstance(value, dict):  # the drilled-disk geometry: disk_geometry_rho, ...
+                flat.update({f"{group}_{key}_{k}": v for k, v in value.items()})
+            elif value is not None:
+                flat[f"{group}_{key}"] = value
+    flat["disk_source"] = setup.disk.source
     return flat
 
 
@@ -130,35 +135,42 @@ def config_of(ds: xr.Dataset) -> dict:
     return json.loads(ds.attrs["config"])
 
 
-def save(ds: xr.Dataset, path: str | os.PathLike) -> Path:
-    """Write ``ds`` as compressed netCDF4 atomically: a temporary file renamed into place."""
+def save(ds: xr.Dataset, path: str | os.PathLike, *, overwrite: bool = True) -> Path:
+    """Write ``ds`` as compressed netCDF4 atomically (:func:`tippedisk_analysis.files.atomic_write`).
+
+    Refuses (:class:`OutputError`, before writing) a directory or device as ``path``, a missing or
+    unwritable directory, and an existing file if ``overwrite`` is False.
+    """
+    if not isinstance(ds, xr.Dataset):
+        raise DatasetError(f"save needs an xarray.Dataset (e.g. the result of simulate()), not "
+                           f"{type(ds).__name__}; wrap arrays with xarray.Dataset(...) first")
+    if not isinstance(path, str | os.PathLike):
+        raise DatasetError(f"path = {path!r} is a {type(path).__name__}; give a file name such as 'run.nc'")
     check_finite(ds)
-    path = Path(path)
-    if path.parent and not path.parent.exists():
-        raise DatasetError(f"directory {str(path.parent)!r} does not exist; create it or choose another --output")
-    tmp = path.with_name(path.name + ".part")
-    try:
-        encoding = {name: {"zlib": True, "complevel": 4} for name, var in ds.data_vars.items()
-                    if np.issubdtype(var.dtype, np.number)}
-        ds.to_netcdf(tmp, engine="netcdf4", encoding=encoding)
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-    return path
+    path = files.check_output(path, overwrite=overwrite)
+    encoding = {name: {"zlib": True, "complevel": 4} for name, var in ds.data_vars.items()
+                if np.issubdtype(var.dtype, np.number)}
+    return files.atomic_write(path, lambda tmp: ds.to_netcdf(tmp, engine="netcdf4", encoding=encoding))
 
 
 def load(path: str | os.PathLike) -> xr.Dataset:
     """Read a dataset written by this package (fully into memory)."""
+    if not isinstance(path, str | os.PathLike):
+        raise DatasetError(f"path = {path!r} is a {type(path).__name__}; give a file name such as 'run.nc'")
     path = Path(path)
+    shown = files.show(path)
+    if path.is_dir():
+        raise DatasetError(f"'{shown}' is a directory; give the path of a .nc file written by tippedisk")
     if not path.is_file():
-        raise DatasetError(f"{str(path)!r} does not exist; give the path of a .nc file written by tippedisk")
+        raise DatasetError(f"'{shown}' does not exist; give the path of a .nc file written by tippedisk")
+    if not files.utf8_encodable(path):
+        raise DatasetError(f"'{shown}' is not a valid UTF-8 file name, which netCDF cannot open; rename the file")
     try:
         with xr.open_dataset(path, engine="netcdf4") as ds:
             ds = ds.load()
     except Exception as exc:  # netCDF4 raises OSError / ValueError for foreign files
-        raise DatasetError(f"{str(path)!r} is not a netCDF dataset ({exc.__class__.__name__}); "
+        raise DatasetError(f"'{shown}' is not a netCDF dataset ({exc.__class__.__name__}); "
                            "give a .nc file written by tippedisk") from None
     if ds.attrs.get("producer") != PRODUCER or "kind" not in ds.attrs:
-        raise DatasetError(f"{str(path)!r} was not written by tippedisk_analysis; give a .nc file written by tippedisk")
+        raise DatasetError(f"'{shown}' was not written by tippedisk_analysis; give a .nc file written by tippedisk")
     return ds
