@@ -28,7 +28,7 @@ from ..errors import Interrupted
 from ..ranges import check_axis
 from ..resources import check_memory
 from ..models import ode
-from ..parameters import Setup, to_dict
+from ..parameters import Setup, eccentricity_columns, to_dict
 from ..results import make_attrs
 from . import reduced, stability
 from . import stationary as st
@@ -43,6 +43,8 @@ copies of the netCDF encoding; 3000 x 3000 points need about 8 GB (measured peak
 SWEEPABLE = {"eps": ("m s-1", "smoothing velocity eps of the regularised Coulomb law (2.29)"),
              "mu": ("1", "friction coefficient mu (2.29)"),
              "e": ("m", "eccentricity e = |r_GS| of the centre of gravity")}
+"""Swept names; an e sweep holds fixed what ``setup.disk`` says (:attr:`Disk.eccentricity_rule`: the
+inertia about G for a disk given by values, the hole geometry but its offset b for a drilled disk)."""
 
 
 def _validated(setup: Setup, name: str, values: np.ndarray) -> None:
@@ -51,7 +53,7 @@ def _validated(setup: Setup, name: str, values: np.ndarray) -> None:
         if name in ("eps", "mu"):
             dataclasses.replace(setup.friction, **{name: float(v)})
         elif name == "e":
-            dataclasses.replace(setup.disk, e=float(v))
+            setup.disk.with_eccentricity(float(v))
 
 
 def _parameter_grid(setup: Setup, sweeps: dict, slip_smoothing: float, shape) -> np.ndarray:
@@ -63,7 +65,10 @@ def _parameter_grid(setup: Setup, sweeps: dict, slip_smoothing: float, shape) ->
         values = np.asarray(sweeps[name], dtype=float)
         index_shape = [1] * len(shape)
         index_shape[axis] = len(values)
-        pars[ode.PARAMETER_NAMES.index(name)] = np.broadcast_to(values.reshape(index_shape), shape).ravel()
+        # e moves with what the disk holds fixed (Disk.with_eccentricity): m, A, B, C change for a drilled disk
+        columns = eccentricity_columns(setup.disk, values) if name == "e" else {name: values}
+        for key, column in columns.items():
+            pars[ode.PARAMETER_NAMES.index(key)] = np.broadcast_to(column.reshape(index_shape), shape).ravel()
     return pars
 
 
@@ -161,7 +166,8 @@ def stability_map(omega, eps, *, mu=None, e=None, setup: Setup | None = None,
                                                           "comment": "noninverted: beta = pi/2, gamma = -pi/2; "
                                                                      "inverted: beta = pi/2, gamma = pi/2"}),
             "omega": ("omega", omega, {"units": "rad s-1", "long_name": "spin rate alpha_dot = Omega"}),
-            **{name: (name, values, {"units": SWEEPABLE[name][0], "long_name": SWEEPABLE[name][1]})
+            **{name: (name, values, {"units": SWEEPABLE[name][0], "long_name": SWEEPABLE[name][1],
+                                     **({"comment": setup.disk.eccentricity_rule} if name == "e" else {})})
                for name, values in sweeps.items()},
             "eig": ("eig", np.arange(stability.N_EIG, dtype=np.int32), {"long_name": "eigenvalue index (by real part)"}),
         },
@@ -175,6 +181,7 @@ def stability_map(omega, eps, *, mu=None, e=None, setup: Setup | None = None,
         "setup": to_dict(setup),
         "omega": _range_config(omega),
         **{name: _range_config(values) for name, values in sweeps.items()},
+        **({"e_sweep": setup.disk.eccentricity_rule} if "e" in sweeps else {}),
         "slip_smoothing": slip_smoothing,
         "reduced_state": list(reduced.STATE_NAMES),
         "stability_tolerance": {"atol": EIG_ATOL, "rtol": EIG_RTOL},

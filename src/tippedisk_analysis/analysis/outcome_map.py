@@ -45,7 +45,7 @@ from ..defaults import (BATCH_SIZE, CHUNK_SIZE, FALL_ANGLE, MAP_TOL, OUTCOME_THR
                         SLIP_SMOOTHING)
 from ..errors import ParameterError
 from ..models import ode
-from ..parameters import Disk, Friction, InitialState, Setup, to_dict
+from ..parameters import Disk, Friction, InitialState, Setup, eccentricity_columns, to_dict
 from ..ranges import check_range
 from ..results import describe, make_attrs
 from . import sweeps
@@ -81,6 +81,11 @@ class MapConfig:
     setup: dict = dataclasses.field(default_factory=lambda: to_dict(Setup()))
 
     def __post_init__(self):
+        if isinstance(self.setup, Setup):
+            object.__setattr__(self, "setup", to_dict(self.setup))
+        if not isinstance(self.setup, dict):
+            raise ParameterError(f"setup must be a Setup, not {type(self.setup).__name__}; give e.g. "
+                                 "setup=Setup(disk=Disk.from_geometry())")
         if not isinstance(self.ranges, dict):
             raise ParameterError(f"ranges must be a dict {{name: (start, stop, n)}}, not {type(self.ranges).__name__}; "
                                  "give e.g. ranges={'omega': (10, 80, 64), 'eps': (0.01, 0.3, 32)}")
@@ -149,9 +154,8 @@ class MapConfig:
 def _point_setup(base: Setup, values: dict) -> tuple[Setup, InitialState]:
     """Setup and initial state of one grid point (Table 3 with the swept values)."""
     fric = {k: values[k] for k in ("mu", "eps") if k in values}
-    disk = {k: values[k] for k in ("e",) if k in values}
-    setup = dataclasses.replace(base, friction=dataclasses.replace(base.friction, **fric),
-                                disk=dataclasses.replace(base.disk, **disk))
+    disk = base.disk.with_eccentricity(float(values["e"])) if "e" in values else base.disk  # what is held: see e_rule
+    setup = dataclasses.replace(base, friction=dataclasses.replace(base.friction, **fric), disk=disk)
     init = {}
     if "omega" in values:
         init["alpha_dot"] = values["omega"]
@@ -246,9 +250,12 @@ def _prepare(config: MapConfig, start: int, stop: int):
     n = stop - start
     model = ode.EULER
     pars = np.repeat(ode.parameter_vector(base, config.fall_angle, config.slip_smoothing)[:, None], n, axis=1)
-    for name in ("mu", "eps", "e"):
+    for name in ("mu", "eps"):
         if name in pts:
             pars[ode.PARAMETER_NAMES.index(name)] = pts[name]
+    if "e" in pts:  # with what the disk holds fixed (Disk.with_eccentricity)
+        for name, column in eccentricity_columns(base.disk, pts["e"]).items():
+            pars[ode.PARAMETER_NAMES.index(name)] = column
     x0 = np.empty((len(model.state_names) + 2, n))
     cache: dict[tuple, np.ndarray] = {}
     for i in range(n):
@@ -426,7 +433,9 @@ def assemble(config: MapConfig, results: dict) -> xr.Dataset:
     coords = {}
     for name, values in axes.items():
         units, long_name, _ = SWEEPABLE[name]
-        coords[name] = (name, values, {"units": units, "long_name": long_name})
+        coords[name] = (name, values, {"units": units, "long_name": long_name,
+                                       **({"comment": config.base_setup().disk.eccentricity_rule}
+                                          if name == "e" else {})})
     counts = {k: int(np.sum(np.asarray(results["outcome"]) == v)) for k, v in OUTCOMES.items()}
     n_failed = counts["failed"]
     status = "completed" if n_failed == 0 else "partial"
@@ -440,7 +449,8 @@ def assemble(config: MapConfig, results: dict) -> xr.Dataset:
     ds = xr.Dataset(data, coords=coords,
                     attrs=make_attrs("outcome_map", config.to_dict(), status, message, model=MODEL,
                                      paper_model=ode.EULER.paper_name, swept=" ".join(dims),
-                                     t_end=config.t_end, window=config.window))
+                                     t_end=config.t_end, window=config.window,
+                                     e_sweep=config.base_setup().disk.eccentricity_rule if "e" in axes else None))
     return describe(ds)
 
 
