@@ -195,7 +195,7 @@ def test_cli_scheduler_address(tmp_path):
                                   dashboard_address=None) as cluster:
         assert main([*argv, "--scheduler", cluster.scheduler_address]) == 0
     on_cluster = load(out)
-    assert main(argv) == 0
+    assert main([*argv, "--overwrite"]) == 0  # the output exists: replacing it needs --overwrite
     xr.testing.assert_identical(on_cluster, load(out))
 
 

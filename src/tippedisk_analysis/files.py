@@ -38,10 +38,12 @@ def utf8_encodable(path: str | os.PathLike) -> bool:
     return True
 
 
-def temporary_name(path: str | os.PathLike) -> Path:
-    """A name unique to this process and call, next to ``path``: ``.{name}.{pid}.{random}.part``."""
+def temporary_name(path: str | os.PathLike, keep_suffix: bool = False) -> Path:
+    """A name unique to this process and call, next to ``path``: ``.{name}.{pid}.{random}.part``
+    (``keep_suffix``: ``...part.gif``, for writers that choose the format by the suffix)."""
     path = Path(path)
-    return path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}{PART_SUFFIX}")
+    return path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}{PART_SUFFIX}"
+                          + (path.suffix if keep_suffix else ""))
 
 
 def check_output(path: str | os.PathLike, *, overwrite: bool = True, netcdf: bool = True,
@@ -87,7 +89,7 @@ def check_output(path: str | os.PathLike, *, overwrite: bool = True, netcdf: boo
     return path
 
 
-def atomic_write(path: str | os.PathLike, write: Callable[[Path], None]) -> Path:
+def atomic_write(path: str | os.PathLike, write: Callable[[Path], None], keep_suffix: bool = False) -> Path:
     """Call ``write(tmp)`` to fill a temporary file next to ``path``, flush it, rename it to ``path``.
 
     The temporary file is removed whatever happens (errors, Ctrl-C). A failing write raises
@@ -97,7 +99,7 @@ def atomic_write(path: str | os.PathLike, write: Callable[[Path], None]) -> Path
     if path.exists() and not path.is_file():  # never replace a device or a directory entry of another kind
         raise OutputError(f"'{show(path)}' is not a regular file (a directory, device, pipe or socket); "
                           "choose a file name")
-    tmp = temporary_name(path)
+    tmp = temporary_name(path, keep_suffix)
     try:
         write(tmp)
         fd = os.open(tmp, os.O_RDONLY)

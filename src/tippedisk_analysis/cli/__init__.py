@@ -1,19 +1,29 @@
 """Command line: ``tippedisk COMMAND``, one module per command, registered with :func:`.registry.command`.
 
-Thin: parse, call the library, print one line. Bad input (a TippediskError) prints one line
-on stderr and exits with status 2; nothing is written then. A run that ended with a
-numerical failure exits with 1.
+Thin: parse, call the library, print one line. The promises every command keeps:
+
+* bad input, an output that cannot be written, or a request that cannot fit in memory: one line
+  on stderr naming the fix, exit status 2, checked before any computation, nothing written;
+* an existing output is replaced only with ``--overwrite`` (two runs started together on one
+  output both finish; the last one's rename wins, nothing is half-written);
+* Ctrl-C: one line saying what was kept (chunks, a checkpoint) and how to resume, exit status 130;
+* a run that ended with a numerical failure (status nonfinite / not_converged) exits with 1.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
+import warnings
 
-from ..errors import TippediskError
+from ..errors import TippediskError, TippediskWarning
 from ..version import __version__
-from . import bifurcation, outcome_map, plot, poincare, simulate, stability_map, study  # noqa: F401 (registration)
+from . import (animate, bifurcation, outcome_map, plot, poincare, simulate, stability_map,  # noqa: F401 (registration)
+               study)
 from .registry import COMMANDS
+
+EXIT_INTERRUPTED = 130  # 128 + SIGINT, as shells report it
 
 
 class _Parser(argparse.ArgumentParser):
@@ -30,18 +40,48 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _one_line_warnings(command: str):
+    """Show the library's warnings (e.g. a damaged chunk recomputed) as one line each."""
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        kind = "note" if issubclass(category, TippediskWarning) else "warning"
+        text = " ".join(str(message).split())
+        print(f"tippedisk {command}: {kind}: {text}", file=sys.stderr)
+
+    return show
+
+
 def main(argv: list[str] | None = None) -> int:
+    for stream in (sys.stdout, sys.stderr):  # file names with bytes that are not UTF-8 print as \xNN
+        if hasattr(stream, "reconfigure"):
+            stream.reconfigure(errors="backslashreplace")
+    command = "?"
     try:
-        args = build_parser().parse_args(argv)
-    except SystemExit as exc:  # --help, --version, or a usage error (one line on stderr, status 2)
-        return int(exc.code or 0)
-    try:
-        return COMMANDS[args.command].run(args)
+        try:
+            args = build_parser().parse_args(argv)
+        except SystemExit as exc:  # --help, --version, or a usage error (one line on stderr, status 2)
+            return int(exc.code or 0)
+        command = args.command
+        with warnings.catch_warnings():
+            warnings.showwarning = _one_line_warnings(command)
+            return COMMANDS[command].run(args)
     except TippediskError as exc:
-        print(f"tippedisk {args.command}: error: {exc}", file=sys.stderr)
+        print(f"tippedisk {command}: error: {' '.join(exc.cli_message().split())}", file=sys.stderr)
         return 2
     except MemoryError:
-        print(f"tippedisk {args.command}: error: not enough memory for this request; use fewer grid points "
+        print(f"tippedisk {command}: error: not enough memory for this request; use fewer grid points "
               "or a shorter run", file=sys.stderr)
         return 2
-
+    except KeyboardInterrupt as exc:
+        text = str(exc) if str(exc) else "interrupted; nothing stored"
+        print(f"tippedisk {command}: {text}", file=sys.stderr)
+        if argv is None:  # the real command: do not wait for worker threads finishing their chunk
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os._exit(EXIT_INTERRUPTED)
+        return EXIT_INTERRUPTED
+    except OSError as exc:  # the environment (disk full, a file removed meanwhile): one line, not a traceback
+        where = f" '{exc.filename}'" if getattr(exc, "filename", None) else ""
+        print(f"tippedisk {command}: error: {exc.strerror or exc}{where}; check the path, the disk space and "
+              "the permissions", file=sys.stderr)
+        return 2

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 from .. import defaults
-from .common import finite_float, positive_int, range_type, writable
+from ..files import show
+from .common import add_disk, add_output, disk_from_args, finite_float, output_path, positive_int, range_type, \
+    scheduler_type
 from .registry import command
 
 
@@ -11,9 +13,10 @@ def _arguments(p) -> None:
     p.add_argument("--omega", type=range_type("omega"), required=True, help="START:STOP:N initial spin Omega "
                    "[rad/s] (N values, ends included; write --omega=-50:-10:5 for a negative START)")
     p.add_argument("--eps", type=range_type("eps"), required=True, help="START:STOP:N smoothing velocity eps [m/s]")
-    p.add_argument("--mu", type=range_type("mu"), help="START:STOP:N friction coefficient (default 0.3)")
-    p.add_argument("--e", type=range_type("e"), help="START:STOP:N eccentricity [m] (default 2.5e-3; A, B, C "
-                                                    "about G held fixed)")
+    p.add_argument("--mu", type=range_type("mu"), help="START:STOP:N friction coefficient [-] (default 0.3)")
+    p.add_argument("--e", type=range_type("e"), help="START:STOP:N eccentricity [m] (default: the disk's). Held "
+                   "fixed: A, B, C about G (--disk table2 / given), or the hole geometry but its offset b, with "
+                   "m, A, B, C recomputed (--disk geometry)")
     p.add_argument("--dgamma0", type=range_type("dgamma0"), help="START:STOP:N gamma(0) + pi/2 [rad] (default 0.1)")
     p.add_argument("--t-end", type=finite_float, default=5.0, help="length of each run [s] (default 5)")
     p.add_argument("--window", type=finite_float, help="classification window at the end [s] "
@@ -27,18 +30,22 @@ def _arguments(p) -> None:
     p.add_argument("--batch-size", type=positive_int, default=defaults.BATCH_SIZE,
                    help=f"SIMD lanes per batch: 1, 2, 4, 8, 16 (default {defaults.BATCH_SIZE})")
     p.add_argument("--threads", type=positive_int, help="threads without --scheduler (default: cores)")
-    p.add_argument("--scheduler", help="dask.distributed scheduler address, or local:N for a local cluster")
-    p.add_argument("--output", "-o", required=True, help="netCDF file (chunks go to OUTPUT.chunks/)")
+    p.add_argument("--scheduler", type=scheduler_type,
+                   help="dask.distributed scheduler address (tcp://host:8786), or local:N for N local processes")
+    add_output(p, "netCDF file (finished chunks go to OUTPUT.chunks/; the same command resumes them)")
+    add_disk(p, e_option=False)
 
 
 @command("outcome-map", "classify runs over a grid of (Omega, eps, ...) -> netCDF", _arguments)
 def outcome_map(args) -> int:
     from ..analysis.outcome_map import outcome_map as run_map
+    from ..parameters import Setup
 
     ranges = {k: getattr(args, k) for k in ("omega", "eps", "mu", "e", "dgamma0") if getattr(args, k) is not None}
-    output = writable(args.output)
+    setup = Setup(disk=disk_from_args(args, sweep_e=args.e[0] if args.e else None, e_swept=True))
+    output = output_path(args)
     ds = run_map(ranges, output=output, scheduler=args.scheduler, threads=args.threads, t_end=args.t_end,
                  window=args.window, tol=args.tol, fall_angle=args.fall_angle, chunk_size=args.chunk_size,
-                 batch_size=args.batch_size)
-    print(f"{output}: {ds.attrs['message']}")
+                 batch_size=args.batch_size, setup=setup, overwrite=args.overwrite)
+    print(f"{show(output)}: {ds.attrs['message']}")
     return 0

@@ -5,13 +5,15 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..errors import ParameterError
-from .common import writable
+from ..files import show
+from .common import output_path
 from .registry import command
 
 
 def _arguments(p) -> None:
     p.add_argument("dataset", help="netCDF file written by tippedisk")
-    p.add_argument("--output", "-o", help="figure file (default: the dataset name with .png)")
+    p.add_argument("--output", "-o", help="figure file, format from the suffix (default: the dataset name with .png)")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing figure (refused without it)")
 
 
 @command("plot", "draw a stored dataset as a figure (PNG, PDF, SVG, ...)", _arguments)
@@ -19,11 +21,12 @@ def plot(args) -> int:
     from .. import plotting, results
 
     ds = results.load(args.dataset)
-    output = writable(args.output or str(Path(args.dataset).with_suffix(".png")))
+    output = Path(args.output or Path(args.dataset).with_suffix(".png"))
     formats = plotting.file_formats()
     if output.suffix.lower().lstrip(".") not in formats:
         raise ParameterError(f"cannot draw to {output.suffix or 'a file without suffix'!r}; give --output with one of "
                              f"{', '.join('.' + f for f in sorted(formats))}")
+    output = output_path(args, str(output), netcdf=False)
     plotting.plot_dataset(ds, output)
-    print(f"{output}: {ds.attrs['kind']} figure")
+    print(f"{show(output)}: {ds.attrs['kind']} figure")
     return 0

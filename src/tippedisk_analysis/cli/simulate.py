@@ -5,8 +5,18 @@ from __future__ import annotations
 import dataclasses
 
 from .. import defaults
-from .common import add_output, finite_float, positive_int, writable
+from ..files import show
+from .common import add_disk, add_output, disk_from_args, finite_float, output_path, positive_int
 from .registry import command
+
+INITIAL = (  # option, InitialState field, help
+    ("alpha", "alpha", "Euler angle alpha(0), precession [rad] (default 0)"),
+    ("beta", "beta", "Euler angle beta(0), inclination [rad] (default pi/2: upright)"),
+    ("gamma0", "gamma", "Euler angle gamma(0), rotation about the normal [rad] (default -pi/2 + 0.1)"),
+    ("alpha-dot", "alpha_dot", "rate alpha_dot(0) = spin Omega [rad/s] (default 40)"),
+    ("beta-dot", "beta_dot", "rate beta_dot(0) [rad/s] (default 0)"),
+    ("gamma-dot", "gamma_dot", "rate gamma_dot(0) [rad/s] (default -alpha_dot cos(beta): no spin about the normal)"),
+)
 
 
 def _arguments(p) -> None:
@@ -25,43 +35,69 @@ def _arguments(p) -> None:
     mor.add_argument("--store-every", type=positive_int, help="store every n-th step (default: 1 ms sampling)")
     mor.add_argument("--max-iter", type=positive_int,
                      help=f"prox iteration limit per step (default {defaults.MOREAU_MAX_ITER})")
-    mor.add_argument("--normalize-quaternion", action="store_true", help="normalise p after each step")
+    mor.add_argument("--normalize-quaternion", action="store_true",
+                     help="normalise p after each step (quaternion models m2, m4, ..., m10 only)")
     mor.add_argument("--progress", action="store_true", default=None, help="always show a progress bar")
-    init = p.add_argument_group("initial state (Table 3 defaults)")
-    for name, unit, default in (("alpha", "rad", 0.0), ("beta", "rad", "pi/2"), ("gamma0", "rad", "-pi/2 + 0.1"),
-                                ("alpha-dot", "rad/s", 40.0), ("beta-dot", "rad/s", 0.0),
-                                ("gamma-dot", "rad/s", "-alpha_dot cos(beta)")):
-        init.add_argument(f"--{name}", type=finite_float, help=f"[{unit}] (default {default})")
-    phys = p.add_argument_group("parameters (Tables 1-2, Sect. 6 defaults)")
-    for name, help_text in (("mu", "friction coefficient (0.3)"), ("eps", "smoothing of (2.29) [m/s] (0.1)"),
-                            ("radius", "disk radius r [m] (0.045)"), ("e", "eccentricity [m] (2.5e-3)"),
-                            ("mass", "mass [kg] (0.435)"), ("gravity", "[m/s^2] (9.81)")):
-        phys.add_argument(f"--{name}", type=finite_float, help=help_text)
+    init = p.add_argument_group("initial state (Table 3 defaults; z and the velocity of G close the contact at C1 "
+                                "without slip)")
+    for option, _, help_text in INITIAL:
+        init.add_argument(f"--{option}", type=finite_float, help=help_text)
+    phys = p.add_argument_group("friction and gravity (Sect. 6 defaults)")
+    phys.add_argument("--mu", type=finite_float, help="friction coefficient [-] (0.3)")
+    phys.add_argument("--eps", type=finite_float, help="smoothing of (2.29) [m/s] (0.1)")
+    phys.add_argument("--gravity", type=finite_float, help="gravitational acceleration [m/s^2] (9.81)")
+    add_disk(p)
+
+
+def _interrupted(checkpoint: str | None) -> str:
+    if checkpoint is None:
+        return "interrupted; nothing stored (ODE runs keep no checkpoint: rerun to start again)"
+    from ..solvers.moreau.checkpoint import stored_progress
+
+    stored = stored_progress(checkpoint)
+    if stored is None:
+        return (f"interrupted; nothing stored yet (a checkpoint is written every {defaults.CHECKPOINT_SECONDS:g} s "
+                "of work): rerun to start again")
+    return (f"interrupted; checkpoint at t = {stored[0]:.6g} of {stored[1]:g} s stored in '{show(checkpoint)}'; "
+            "rerun the same command to resume")
 
 
 @command("simulate", "simulate the tippedisk and write a netCDF dataset", _arguments)
 def simulate(args) -> int:
     from .. import results
-    from ..parameters import Disk, Friction, InitialState, Setup
+    from ..errors import Interrupted
+    from ..parameters import Friction, InitialState, Setup
     from ..solvers import resolve
     from ..solvers import simulate as run_model
+    from ..solvers.moreau.checkpoint import CheckpointError
 
     info = resolve(args.model)
-    disk_kw = {k: v for k, v in (("r", args.radius), ("e", args.e), ("m", args.mass)) if v is not None}
     fric_kw = {k: v for k, v in (("mu", args.mu), ("eps", args.eps)) if v is not None}
-    init_kw = {k: v for k, v in (("alpha", args.alpha), ("beta", args.beta), ("gamma", args.gamma0),
-                                 ("alpha_dot", args.alpha_dot), ("beta_dot", args.beta_dot),
-                                 ("gamma_dot", args.gamma_dot)) if v is not None}
-    setup = Setup(disk=dataclasses.replace(Disk(), **disk_kw), friction=dataclasses.replace(Friction(), **fric_kw),
+    init_kw = {field: getattr(args, option.replace("-", "_")) for option, field, _ in INITIAL
+               if getattr(args, option.replace("-", "_")) is not None}
+    setup = Setup(disk=disk_from_args(args), friction=dataclasses.replace(Friction(), **fric_kw),
                   **({"gravity": args.gravity} if args.gravity is not None else {}))
     options = {k: v for k, v in (("dt_output", args.dt_output), ("tol", args.tol),
                                  ("fall_angle", args.fall_angle), ("dt", args.dt), ("store_every", args.store_every),
                                  ("max_iter", args.max_iter), ("progress", args.progress),
                                  ("normalize_quaternion", args.normalize_quaternion or None)) if v is not None}
-    output = writable(args.output)
+    initial = InitialState(**init_kw)
+    output = output_path(args)
+    checkpoint = None
     if "checkpoint" in info.options:  # a long run killed midway resumes when the command is repeated
-        options["checkpoint"] = str(output) + ".checkpoint.npz"
-    ds = run_model(info.name, args.t_end, setup=setup, initial=InitialState(**init_kw), **options)
+        checkpoint = options["checkpoint"] = str(output) + ".checkpoint.npz"
+    try:
+        try:
+            ds = run_model(info.name, args.t_end, setup=setup, initial=initial, **options)
+        except CheckpointError:
+            if not args.overwrite:
+                raise
+            from pathlib import Path
+
+            Path(checkpoint).unlink(missing_ok=True)  # --overwrite: discard the other run's or a damaged checkpoint
+            ds = run_model(info.name, args.t_end, setup=setup, initial=initial, **options)
+    except KeyboardInterrupt:
+        raise Interrupted(_interrupted(checkpoint)) from None
     results.save(ds, output)
-    print(f"{output}: {ds.attrs['model']} {ds.attrs['status']}: {ds.attrs['message']}")
+    print(f"{show(output)}: {ds.attrs['model']} {ds.attrs['status']}: {ds.attrs['message']}")
     return 1 if ds.attrs["status"] in ("nonfinite", "not_converged") else 0

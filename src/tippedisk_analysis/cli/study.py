@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import importlib
 import pkgutil
+from pathlib import Path
 
-from ..errors import ParameterError
+from ..errors import Interrupted, ParameterError
+from ..files import check_output, show
 from .registry import command
 
 STUDIES_PACKAGE = "tippedisk_studies"
@@ -26,9 +28,15 @@ def run(name: str, output_dir: str = "output", quick: bool = False):
 
 
 def _arguments(p) -> None:
-    p.add_argument("name", nargs="?", help="study name (see --list)")
+    try:
+        available = names()
+    except ImportError:  # pragma: no cover - the studies are not installed
+        available = []
+    p.add_argument("name", nargs="?", metavar="NAME", help="study name: " + (", ".join(available) or "(none installed)"))
     p.add_argument("--list", action="store_true", help="print the study names with their first docstring line")
-    p.add_argument("--output-dir", default="output", help="folder for the datasets and figures (default output/)")
+    p.add_argument("--output-dir", default="output",
+                   help="folder for the datasets and figures (default output/; created if missing; a study "
+                        "replaces its own files there)")
     p.add_argument("--quick", action="store_true", help="reduced size (seconds): a smoke test of the study")
 
 
@@ -41,5 +49,18 @@ def study(args) -> int:
         return 0
     if not args.name:
         raise ParameterError("give a study name or --list")
-    run(args.name, args.output_dir, quick=args.quick)
+    if args.name not in names():
+        raise ParameterError(f"unknown study {args.name!r}; choose one of {', '.join(names())}")
+    out = Path(args.output_dir)
+    if out.exists() and not out.is_dir():
+        raise ParameterError(f"--output-dir '{show(out)}' is a file; give a folder")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ParameterError(f"cannot create --output-dir '{show(out)}' ({exc.strerror}); give another folder") from None
+    check_output(out / "probe.nc", option="--output-dir")  # writable, before the study starts
+    try:
+        run(args.name, args.output_dir, quick=args.quick)
+    except KeyboardInterrupt:
+        raise Interrupted(f"interrupted; the files the study finished stay in '{show(out)}' (rerun to redo it)") from None
     return 0

@@ -11,14 +11,16 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import xarray as xr  # noqa: E402
 
+from .. import files  # noqa: E402
 from ..errors import DatasetError  # noqa: E402
 from . import stability_map, trajectories  # noqa: E402, F401 (registration)
+from .animation import animate  # noqa: E402
 from .registry import FIGURES  # noqa: E402
 from .simulation import comparison_figure, gap_figure, simulation_figure, stroboscopic_figure  # noqa: E402
 from .stability_map import stability_map_figure  # noqa: E402
 from .trajectories import bifurcation_figure, outcome_map_figure, poincare_figure  # noqa: E402
 
-__all__ = ["FIGURES", "bifurcation_figure", "comparison_figure", "file_formats", "gap_figure", "outcome_map_figure",
+__all__ = ["FIGURES", "animate", "bifurcation_figure", "comparison_figure", "file_formats", "gap_figure", "outcome_map_figure",
            "plot_dataset", "poincare_figure", "simulation_figure", "stability_map_figure", "stroboscopic_figure"]
 
 
@@ -30,16 +32,32 @@ def file_formats() -> set[str]:
 
 
 def plot_dataset(ds: xr.Dataset, path: str | Path) -> Path:
-    """Draw ``ds`` with the figure function registered for its ``kind`` and save it (format from the suffix)."""
+    """Draw ``ds`` with the figure function registered for its ``kind`` and save it (format from the suffix).
+
+    The file is written like every output (:func:`tippedisk_analysis.files.atomic_write`). A dataset
+    without samples (e.g. a run that became non-finite at once) is refused with DatasetError.
+    """
+    if not isinstance(ds, xr.Dataset):
+        raise DatasetError(f"plot_dataset needs an xarray.Dataset written by tippedisk, not {type(ds).__name__}")
     kind = ds.attrs.get("kind")
     if kind not in FIGURES:
         raise DatasetError(f"no figure for datasets of kind {kind!r}; plottable kinds: {', '.join(FIGURES)}")
+    empty = [d for d in ("time", "crossing", "point", "omega") if ds.sizes.get(d, None) == 0]
+    if empty:
+        raise DatasetError(f"the {kind} dataset holds no samples (dimension {empty[0]!r} is empty; status "
+                           f"{ds.attrs.get('status', '?')}: {ds.attrs.get('message', '')}); nothing to draw")
+    path = Path(path)
+    suffix = path.suffix.lower().lstrip(".")
+    if suffix not in file_formats():
+        raise DatasetError(f"cannot draw to {path.suffix or 'a file without suffix'!r}; give one of "
+                           f"{', '.join('.' + f for f in sorted(file_formats()))}")
     try:
         fig = FIGURES[kind](ds)
     except KeyError as exc:
         plt.close("all")
         raise DatasetError(f"the {kind} dataset lacks {exc}; it is damaged or not one of ours") from None
-    path = Path(path)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    try:
+        files.atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=120, format=suffix))
+    finally:
+        plt.close(fig)
     return path

@@ -35,6 +35,10 @@ def stored_progress(path) -> tuple[float, float] | None:
         return None
 
 
+class CheckpointError(ParameterError):
+    """A checkpoint that cannot be resumed: damaged, incomplete, or of another run."""
+
+
 class Checkpoint:
     """The loop state of one Moreau run in an .npz file."""
 
@@ -52,18 +56,18 @@ class Checkpoint:
             with np.load(self.path) as f:
                 stored = {name: f[name].copy() for name in f.files}
         except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile) as exc:
-            raise ParameterError(f"checkpoint '{show(self.path)}' is unreadable ({exc.__class__.__name__}); "
+            raise CheckpointError(f"checkpoint '{show(self.path)}' is unreadable ({exc.__class__.__name__}); "
                                  "delete it to start afresh",
                                  cli=f"checkpoint '{show(self.path)}' is unreadable ({exc.__class__.__name__}); "
                                      "give --overwrite (or delete it) to start afresh") from None
         if str(stored.get("fingerprint")) != self.fingerprint:
-            raise ParameterError(f"checkpoint '{show(self.path)}' belongs to a different run; delete it or "
+            raise CheckpointError(f"checkpoint '{show(self.path)}' belongs to a different run; delete it or "
                                  "choose another output file",
                                  cli=f"checkpoint '{show(self.path)}' belongs to a different run; give --overwrite "
                                      "(or delete it) to start afresh, or another --output")
         missing = [name for name in self.FIELDS if name not in stored]
         if missing:
-            raise ParameterError(f"checkpoint '{show(self.path)}' lacks {', '.join(missing)}; delete it to start "
+            raise CheckpointError(f"checkpoint '{show(self.path)}' lacks {', '.join(missing)}; delete it to start "
                                  "afresh", cli=f"checkpoint '{show(self.path)}' lacks {', '.join(missing)}; give "
                                                "--overwrite (or delete it) to start afresh")
         return {name: stored[name] for name in self.FIELDS}

@@ -1,0 +1,40 @@
+"""One style for axis labels across the figures: "quantity symbol [unit]", units as in the text (rad/s)."""
+
+from __future__ import annotations
+
+# name: label without the unit
+NAMES = {
+    "omega": r"spin rate $\Omega$",
+    "alpha_dot": r"$\dot\alpha$",
+    "eps": r"smoothing $\varepsilon$",
+    "mu": r"friction coefficient $\mu$",
+    "e": "eccentricity $e$",
+    "dgamma0": r"initial perturbation $\Delta\gamma_0$",
+    "alpha": r"$\alpha$",
+    "beta": r"$\beta$",
+    "gamma": r"$\gamma$",
+    "beta_dot": r"$\dot\beta$",
+    "gamma_dot": r"$\dot\gamma$",
+    "z_S": r"$z_S$",
+    "z": r"$z_G$",
+    "g_N1": r"$g_{N1}$",
+    "lambda_N": r"$\lambda_N$",
+    "E_kin": r"$E_\mathrm{kin}$",
+    "E_pot": r"$E_\mathrm{pot}$",
+    "E_tot": r"$E_\mathrm{tot}$",
+    "time": "time $t$",
+}
+
+UNITS = {"rad s-1": "rad/s", "m s-1": "m/s", "s-1": "1/s", "m s-2": "m/s^2", "rad s-2": "rad/s^2", "1": "-",
+         "kg m2": "kg m^2"}
+
+
+def unit(units: str) -> str:
+    """CF units as written in the figures: rad s-1 -> rad/s, 1 -> -."""
+    return UNITS.get(units.strip(), units.strip())
+
+
+def axis_label(name: str, units: str = "") -> str:
+    """e.g. axis_label("omega", "rad s-1") -> "spin rate $\\Omega$ [rad/s]"."""
+    text = NAMES.get(name, name.replace("_", " "))
+    return f"{text} [{unit(units)}]" if units else text
