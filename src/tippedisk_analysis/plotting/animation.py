@@ -159,22 +159,26 @@ class Animator:
         width, height = size
         self.fig = plt.figure(figsize=(width / dpi, height / dpi), dpi=dpi)
         self.dpi = dpi
-        if panels:
-            grid = self.fig.add_gridspec(len(panels), 2, width_ratios=(1.35, 1.0), left=0.0, right=0.97,
-                                         bottom=0.1, top=0.95, wspace=0.12, hspace=0.45)
-            self.ax = self.fig.add_subplot(grid[:, 0], projection="3d")
-        else:
-            self.ax = self.fig.add_subplot(projection="3d")
+        self.font = max(5.0, 8.0 * min(width / 960, height / 540) ** 0.5)
+        right = 0.56 if panels else 1.0
+        self.ax = self.fig.add_axes((0.0, 0.0, right, 0.9), projection="3d")
         self._scene()
         self.cursors = []
         t = ds["time"].values
+        n = len(panels)
+        top, bottom, gap = 0.9, 0.12, 0.07
+        h = (top - bottom - gap * (n - 1)) / max(n, 1)
         for i, name in enumerate(panels):
-            ax = self.fig.add_subplot(grid[i, 1])
+            ax = self.fig.add_axes((0.66, top - (i + 1) * h - i * gap, 0.31, h))
             ax.plot(t, ds[name].values, color="k", lw=0.8)
-            ax.set_ylabel(axis_label(name, ds[name].attrs.get("units", "")), fontsize=8)
-            ax.tick_params(labelsize=7)
-            if i == len(panels) - 1:
-                ax.set_xlabel("time t [s]", fontsize=8)
+            ax.set_xlim(self.times[0], self.times[-1]) if self.times[-1] > self.times[0] else None
+            ax.set_title(axis_label(name, ds[name].attrs.get("units", "")), fontsize=self.font, loc="left", pad=2)
+            ax.tick_params(labelsize=self.font * 0.85)
+            ax.yaxis.get_offset_text().set_fontsize(self.font * 0.8)
+            if i == n - 1:
+                ax.set_xlabel("time t [s]", fontsize=self.font)
+            else:
+                ax.tick_params(labelbottom=False)
             self.cursors.append(ax.axvline(self.times[0], color="tab:red", lw=1.0))
 
     def _scene(self) -> None:
@@ -192,28 +196,31 @@ class Animator:
         z1 = max(2.3 * r, float(np.max([p.rim[2].max() for p in self.poses])) * 1.05)
         ax.set(xlim=(x0, x1), ylim=(y0, y1), zlim=(0.0, z1))
         ax.set_box_aspect((1.0, 1.0, z1 / span))
-        ax.set_xlabel("x [m]", fontsize=7, labelpad=-6)
-        ax.set_ylabel("y [m]", fontsize=7, labelpad=-6)
-        ax.set_zlabel("z [m]", fontsize=7, labelpad=-6)
-        ax.tick_params(labelsize=6, pad=-2)
+        f = self.font
+        ax.set_xlabel("x [m]", fontsize=f * 0.85, labelpad=-4)
+        ax.set_ylabel("y [m]", fontsize=f * 0.85, labelpad=-4)
+        ax.set_zlabel("z [m]", fontsize=f * 0.85, labelpad=-4)
+        ax.tick_params(labelsize=f * 0.7, pad=-2)
         ax.view_init(elev=18, azim=-60)
+        ax.computed_zorder = False  # the table below everything, the disk above its track (explicit zorder)
         ax.add_collection3d(Poly3DCollection([[(x0, y0, 0), (x1, y0, 0), (x1, y1, 0), (x0, y1, 0)]],
-                                             facecolor="0.92", edgecolor="0.7", lw=0.5))
+                                             facecolor="0.92", edgecolor="0.7", lw=0.5, zorder=0))
         p = self.poses[0]
-        self.face = Poly3DCollection([p.rim.T], facecolor="tab:blue", alpha=0.35, edgecolor="none")
+        (self.track,) = ax.plot([], [], [], color="tab:orange", lw=0.8, label="track of C1 on the table", zorder=1)
+        self.face = Poly3DCollection([p.rim.T], facecolor="tab:blue", alpha=0.35, edgecolor="none", zorder=2)
         ax.add_collection3d(self.face)
-        (self.rim,) = ax.plot(*p.rim, color="navy", lw=1.5)
-        (self.hole,) = ax.plot(*p.hole, color="navy", lw=1.0)
-        (self.gs,) = ax.plot(*np.stack([p.G, p.S], axis=1), color="0.3", lw=0.8)
-        (self.g_mark,) = ax.plot(*p.G[:, None], "o", color="w", mec="k", ms=5, label="G (geometric centre)")
-        (self.s_mark,) = ax.plot(*p.S[:, None], "o", color="tab:red", ms=5, label="S (centre of gravity)")
-        (self.c_mark,) = ax.plot(*p.C1[:, None], "o", color="tab:orange", ms=4, label="contact point C1")
-        (self.track,) = ax.plot([], [], [], color="tab:orange", lw=0.8, label="track of C1 on the table")
-        (self.trail,) = ax.plot([], [], [], color="tab:red", lw=0.8, alpha=0.7, label="trail of S")
-        ax.legend(loc="upper left", fontsize=6, frameon=False, bbox_to_anchor=(0.0, 0.93))
-        self.label = ax.text2D(0.02, 0.97, "", transform=ax.transAxes, fontsize=9)
+        (self.rim,) = ax.plot(*p.rim, color="navy", lw=1.5, zorder=3)
+        (self.hole,) = ax.plot(*p.hole, color="navy", lw=1.0, zorder=3)
+        (self.gs,) = ax.plot(*np.stack([p.G, p.S], axis=1), color="0.3", lw=0.8, zorder=4)
+        (self.trail,) = ax.plot([], [], [], color="tab:red", lw=0.8, alpha=0.7, label="trail of S", zorder=4)
+        (self.g_mark,) = ax.plot(*p.G[:, None], "o", color="w", mec="k", ms=5, label="G (geometric centre)", zorder=5)
+        (self.s_mark,) = ax.plot(*p.S[:, None], "o", color="tab:red", ms=5, label="S (centre of gravity)", zorder=5)
+        (self.c_mark,) = ax.plot(*p.C1[:, None], "o", color="tab:orange", ms=4, label="contact point C1", zorder=5)
+        self.fig.legend(handles=[self.g_mark, self.s_mark, self.c_mark, self.track, self.trail], loc="upper left",
+                        fontsize=f * 0.75, frameon=False, ncol=1, bbox_to_anchor=(0.0, 0.88), handlelength=1.2)
         title = self.ds.attrs.get("paper_model", "") + f" ({self.ds.attrs.get('model', '')})"
-        self.fig.suptitle(title, x=0.3, y=0.99, fontsize=9)
+        self.fig.text(0.01, 0.965, title, fontsize=f * 1.1, va="center")
+        self.label = self.fig.text(0.01, 0.91, "", fontsize=f * 1.1, va="center", family="monospace")
 
     def draw(self, k: int):
         """Update every artist to frame ``k``; returns them."""
