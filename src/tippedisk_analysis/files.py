@@ -13,10 +13,14 @@ cannot encode, or (unless ``overwrite``) an existing file.
 
 from __future__ import annotations
 
+import contextlib
 import os
+import re
 import secrets
+import signal
 import stat
-from collections.abc import Callable
+import threading
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 from .errors import OutputError
@@ -44,6 +48,60 @@ def temporary_name(path: str | os.PathLike, keep_suffix: bool = False) -> Path:
     path = Path(path)
     return path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}{PART_SUFFIX}"
                           + (path.suffix if keep_suffix else ""))
+
+
+@contextlib.contextmanager
+def deferred_interrupt() -> Iterator[None]:
+    """Hold Ctrl-C (SIGINT) until the block is done, then raise KeyboardInterrupt.
+
+    netCDF-C / HDF5 and xarray's file locks do not survive an exception raised in the middle of a
+    write or read: the process would hang or leave a locked file. Writes take milliseconds, so
+    Ctrl-C waits for them. Only the main thread receives signals; elsewhere this does nothing.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    received = []
+    try:
+        previous = signal.signal(signal.SIGINT, lambda signum, frame: received.append(signum))
+    except ValueError:  # pragma: no cover - signals unavailable (e.g. embedded interpreters)
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous if previous is not None else signal.default_int_handler)
+        if received:
+            raise KeyboardInterrupt
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # pragma: no cover - another user's process
+        return True
+    return True
+
+
+def remove_stale_parts(path: str | os.PathLike) -> None:
+    """Remove temporary files of ``path`` left by processes that died (``kill -9``, power loss)."""
+    path = Path(path)
+    pattern = re.compile(re.escape(f".{path.name}.") + r"(\d+)\.[0-9a-f]+" + re.escape(PART_SUFFIX))
+    try:
+        candidates = list(path.parent.glob(f".{glob_escape(path.name)}.*{PART_SUFFIX}*"))
+    except OSError:
+        return
+    for candidate in candidates:
+        match = pattern.match(candidate.name)
+        if match and int(match.group(1)) != os.getpid() and not _pid_alive(int(match.group(1))):
+            with contextlib.suppress(OSError):
+                candidate.unlink()
+
+
+def glob_escape(name: str) -> str:
+    return re.sub(r"([*?\[])", r"[\1]", name)
 
 
 def check_output(path: str | os.PathLike, *, overwrite: bool = True, netcdf: bool = True,
@@ -86,13 +144,19 @@ def check_output(path: str | os.PathLike, *, overwrite: bool = True, netcdf: boo
                           cli=f"cannot create files in '{show(parent)}' ({reason}); give another {option}") from None
     os.close(fd)
     os.unlink(probe)
+    remove_stale_parts(path)
     return path
 
 
-def atomic_write(path: str | os.PathLike, write: Callable[[Path], None], keep_suffix: bool = False) -> Path:
+def atomic_write(path: str | os.PathLike, write: Callable[[Path], None], keep_suffix: bool = False,
+                 interruptible: bool = False) -> Path:
     """Call ``write(tmp)`` to fill a temporary file next to ``path``, flush it, rename it to ``path``.
 
-    The temporary file is removed whatever happens (errors, Ctrl-C). A failing write raises
+    Ctrl-C during the write is held until the file is in place (:func:`deferred_interrupt`), unless
+    ``interruptible`` (long writers that Ctrl-C can stop safely, e.g. animations): then only the
+    rename is held. ``keep_suffix``: the temporary name ends with the suffix of ``path`` (writers
+    that choose the format by it). The temporary file is removed
+    whatever happens (errors, Ctrl-C). A failing write raises
     :class:`OutputError` naming the path and the operating system's reason.
     """
     path = Path(path)
@@ -101,13 +165,15 @@ def atomic_write(path: str | os.PathLike, write: Callable[[Path], None], keep_su
                           "choose a file name")
     tmp = temporary_name(path, keep_suffix)
     try:
-        write(tmp)
-        fd = os.open(tmp, os.O_RDONLY)
-        try:
-            os.fsync(fd)
-        finally:
-            os.close(fd)
-        os.replace(tmp, path)
+        with contextlib.nullcontext() if interruptible else deferred_interrupt():
+            write(tmp)  # netCDF: Ctrl-C waits for the write (an HDF5 write interrupted midway can hang)
+        with deferred_interrupt():
+            fd = os.open(tmp, os.O_RDONLY)
+            try:
+                os.fsync(fd)
+            finally:
+                os.close(fd)
+            os.replace(tmp, path)
     except OSError as exc:
         reason = exc.strerror or str(exc) or exc.__class__.__name__
         raise OutputError(f"cannot write '{show(path)}' ({reason}); check the disk space and the directory's "

@@ -53,7 +53,8 @@ def human(nbytes: float) -> str:
     """12.3 GB, 450 MB, 3.1 TB."""
     for unit, size in (("TB", 1e12), ("GB", 1e9), ("MB", 1e6)):
         if nbytes >= size:
-            return f"{nbytes / size:.3g} {unit}"
+            value = nbytes / size
+            return f"{value:,.0f} {unit}" if value >= 1000 else f"{value:.3g} {unit}"
     return f"{nbytes / 1e3:.3g} kB"
 
 

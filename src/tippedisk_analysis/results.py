@@ -166,7 +166,7 @@ def load(path: str | os.PathLike) -> xr.Dataset:
     if not files.utf8_encodable(path):
         raise DatasetError(f"'{shown}' is not a valid UTF-8 file name, which netCDF cannot open; rename the file")
     try:
-        with xr.open_dataset(path, engine="netcdf4") as ds:
+        with files.deferred_interrupt(), xr.open_dataset(path, engine="netcdf4") as ds:
             ds = ds.load()
     except Exception as exc:  # netCDF4 raises OSError / ValueError for foreign files
         raise DatasetError(f"'{shown}' is not a netCDF dataset ({exc.__class__.__name__}); "

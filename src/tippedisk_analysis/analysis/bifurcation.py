@@ -123,7 +123,7 @@ def bifurcation_diagram(omega, *, quantity: str = "gamma", section: str = "beta_
                          run_chunk, functools.partial(_assemble, config, omegas, sec),
                          functools.partial(poincare.section_integrator, model.name, sec.quantity, sec.modulo,
                                            sec.direction, float(tol)),
-                         unit="Omega", bytes_per_point=10 + 8 + 40 * crossings,
+                         unit="Omega value", bytes_per_point=10 + 8 + 40 * crossings,
                          seconds_per_point=SECONDS_PER_RUN_SECOND * t_end)
     return sweeps.run_sweep(sweep, output=output, scheduler=scheduler, threads=threads, progress=progress,
                             overwrite=overwrite)

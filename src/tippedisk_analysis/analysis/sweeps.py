@@ -89,6 +89,34 @@ def stored_chunks(d: Path) -> list[Path]:
     return sorted(d.glob("chunk_*.nc")) if d.is_dir() else []
 
 
+RUNNING = ".running.{}"  # marker of a process working on the chunk directory (its pid)
+
+
+def _register(d: Path) -> Path:
+    marker = d / RUNNING.format(os.getpid())
+    marker.touch()
+    return marker
+
+
+def _others_running(d: Path) -> bool:
+    """True if another live process works on ``d`` (two runs of one command share the directory)."""
+    for marker in d.glob(RUNNING.format("*")):
+        pid = marker.name.rpartition(".")[2]
+        if pid.isdigit() and int(pid) != os.getpid() and files._pid_alive(int(pid)):
+            return True
+    return False
+
+
+def _release(d: Path | None, marker: Path | None, remove: bool) -> None:
+    """Unregister; remove the directory if asked and no other process still works in it."""
+    if d is None:
+        return
+    if marker is not None:
+        marker.unlink(missing_ok=True)
+    if remove and not _others_running(d):
+        shutil.rmtree(d, ignore_errors=True)
+
+
 def estimate(sweep: Sweep, workers: int = 1) -> tuple[float, float]:
     """(bytes of the merged result at its peak, wall seconds on ``workers`` cores) of the whole sweep."""
     return MERGE_FACTOR * sweep.n_points * sweep.bytes_per_point, sweep.n_points * sweep.seconds_per_point / workers
@@ -140,22 +168,23 @@ def _write_chunk(d: Path, index: int, start: int, stop: int, res: dict, cfg_hash
         v = np.asarray(v)
         data[k] = (tuple(f"{k}_{axis}" for axis in range(v.ndim)), v)
     ds = xr.Dataset(data, attrs={"start": start, "stop": stop, "config_hash": cfg_hash})
-    for attempt in (0, 1):
+    for attempt in range(3):
         try:
             if not d.is_dir():  # removed by a concurrent run that finished first: recreate it
                 d.mkdir(exist_ok=True)
                 _write_config(d, cfg)
+                _register(d)
             files.atomic_write(d / CHUNK_PATTERN.format(index), lambda tmp: ds.to_netcdf(tmp, engine="netcdf4"))
             return
-        except Exception:  # noqa: BLE001 - a concurrent removal of the directory mid-write; retry once
-            if attempt:
+        except Exception:  # noqa: BLE001 - the directory removed by a concurrent run mid-write: retry
+            if attempt == 2:
                 raise
 
 
 def _read_chunk(path: Path, start: int, stop: int, variables, cfg_hash: str) -> dict | None:
     """The results stored in ``path``; None (with a warning) if it is damaged or belongs elsewhere."""
     try:
-        with xr.open_dataset(path, engine="netcdf4") as ds:
+        with files.deferred_interrupt(), xr.open_dataset(path, engine="netcdf4") as ds:
             stored_hash = ds.attrs.get("config_hash", cfg_hash)
             if int(ds.attrs["start"]) != start or int(ds.attrs["stop"]) != stop or stored_hash != cfg_hash:
                 reason = "belongs to another configuration or chunk size"
@@ -238,11 +267,22 @@ def run_sweep(sweep: Sweep, *, output=None, scheduler=None, threads: int | None 
 
 
 def _run(sweep: Sweep, bounds, output, client, threads, progress, on_chunk, overwrite) -> xr.Dataset:
-    from tqdm import tqdm
-
     cfg = json.dumps(sweep.config, sort_keys=True)
     cfg_hash = config_hash(sweep.config)
     d, created = _prepare_dir(sweep, output, overwrite) if output is not None else (None, False)
+    marker = _register(d) if d is not None else None
+    try:
+        return _run_registered(sweep, bounds, output, client, threads, progress, on_chunk, d, created, marker, cfg,
+                               cfg_hash)
+    except BaseException:
+        _release(d, marker, remove=False)
+        raise
+
+
+def _run_registered(sweep, bounds, output, client, threads, progress, on_chunk, d, created, marker, cfg,
+                    cfg_hash) -> xr.Dataset:
+    from tqdm import tqdm
+
     results: dict[int, dict] = {}
     if d is not None:
         for i, (s, e) in enumerate(bounds):
@@ -284,7 +324,7 @@ def _run(sweep: Sweep, bounds, output, client, threads, progress, on_chunk, over
         from ..results import save
 
         save(ds, output)
-        shutil.rmtree(d, ignore_errors=True)
+        _release(d, marker, remove=True)
     return ds
 
 
@@ -303,7 +343,7 @@ def _interrupted(sweep: Sweep, d: Path | None, created: bool, n_stored: int, n_t
         return Interrupted(f"interrupted; {n_stored} of {n_total} chunks computed, nothing stored (no output given)",
                            stored=0, total=n_total)
     if not stored_chunks(d):  # nothing to resume: leave no directory behind to block another configuration
-        if created:
+        if created and not _others_running(d):
             shutil.rmtree(d, ignore_errors=True)
         return Interrupted(f"interrupted; 0 of {n_total} chunks stored, nothing to resume", stored=0, total=n_total)
     n_files = len(stored_chunks(d))

@@ -33,7 +33,7 @@ def _arguments(p) -> None:
 def bifurcation(args) -> int:
     from ..analysis.bifurcation import bifurcation_diagram
 
-    setup, initial = setup_and_initial(args)
+    setup, initial = setup_and_initial(args, omega=False)
     output = output_path(args)
     ds = bifurcation_diagram(args.omega, quantity=args.quantity, section=args.section, direction=args.direction,
                              setup=setup, initial=initial, t_transient=args.t_transient, t_end=args.t_end,

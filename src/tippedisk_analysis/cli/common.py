@@ -154,13 +154,14 @@ def disk_from_args(args, *, sweep_e: float | None = None, e_swept: bool = False)
     return disk
 
 
-def setup_and_initial(args):
-    """Setup and InitialState from ``add_initial_and_friction`` and ``add_disk`` options."""
+def setup_and_initial(args, omega: bool = True):
+    """Setup and InitialState from ``add_initial_and_friction`` and ``add_disk`` options
+    (``omega``: ``--omega`` is the initial spin; False where it is a range, as in bifurcation)."""
     from ..parameters import Friction, InitialState, Setup
 
     fric = {k: v for k, v in (("mu", args.mu), ("eps", args.eps)) if v is not None}
     init = {}
-    if getattr(args, "omega", None) is not None:
+    if omega and getattr(args, "omega", None) is not None:
         init["alpha_dot"] = args.omega
     if args.dgamma0 is not None:
         init["gamma"] = -0.5 * math.pi + args.dgamma0

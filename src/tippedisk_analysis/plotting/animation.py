@@ -278,7 +278,7 @@ def animate(ds: xr.Dataset, path: str | Path, *, speed: float = 0.1, fps: float 
                 bar.update()
 
     try:
-        files.atomic_write(path, write, keep_suffix=True)
+        files.atomic_write(path, write, keep_suffix=True, interruptible=True)
     finally:
         bar.close()
         anim.close()
