@@ -23,11 +23,15 @@ per worker are queued at a time, so the bookkeeping does not grow with the grid.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
+import logging
 import os
 import shutil
+import signal
 import sys
+import threading
 import warnings
 from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
@@ -217,6 +221,21 @@ def parse_scheduler(scheduler: str) -> tuple[str, int | None]:
     return "address", None
 
 
+@contextlib.contextmanager
+def _quiet_children():
+    """Worker processes started here ignore Ctrl-C (a terminal sends it to the whole process group):
+    this process stops them cleanly instead, and their logs stay at the error level."""
+    os.environ.setdefault("DASK_LOGGING__DISTRIBUTED", "error")
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)  # inherited by spawned processes
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous if previous is not None else signal.default_int_handler)
+
+
 def _client(scheduler: str):
     kind, n = parse_scheduler(scheduler)
     try:
@@ -226,7 +245,9 @@ def _client(scheduler: str):
     if kind == "local":
         resources.check_memory(n * resources.WORKER_BYTES, f"a local dask cluster of {n} worker processes",
                                f"use fewer workers (local:{os.cpu_count() or 1} uses every core)")
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
+        with _quiet_children():
+            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+                                   silence_logs=logging.ERROR)
         return Client(cluster), cluster
     try:
         return Client(scheduler, timeout="3s"), None
