@@ -130,6 +130,14 @@ def flat_parameters(setup) -> dict:
     return flat
 
 
+def require_samples(ds: xr.Dataset, what: str = "draw") -> None:
+    """DatasetError if a dimension of samples is empty (e.g. a run that became non-finite at once)."""
+    empty = [d for d in ("time", "crossing", "point", "omega") if ds.sizes.get(d, None) == 0]
+    if empty:
+        raise DatasetError(f"the {ds.attrs.get('kind', '')} dataset holds no samples (dimension {empty[0]!r} is empty; "
+                           f"status {ds.attrs.get('status', '?')}: {ds.attrs.get('message', '')}); nothing to {what}")
+
+
 def config_of(ds: xr.Dataset) -> dict:
     """The configuration stored in a dataset."""
     return json.loads(ds.attrs["config"])

@@ -39,18 +39,34 @@ PER_OMEGA = ("n_crossings", "status_code", "valid")
 PER_CROSSING = ("omega_of_point", "time", "value", "beta", "gamma")
 
 
-def _omega_axis(omega) -> tuple[np.ndarray, dict | list]:
-    """(values, their description for the configuration) of a range (start, stop, n) or an array."""
+def _omega_axis(omega) -> dict | list:
+    """The description of a range (start, stop, n) (nothing materialised yet) or of an array, for the config."""
     if isinstance(omega, tuple) and len(omega) == 3:
         start, stop, n = check_range(omega, "omega")
-        return np.linspace(start, stop, n), {"start": start, "stop": stop, "n": n}
-    values = check_axis(omega, "omega")
-    return values, values.tolist()
+        return {"start": start, "stop": stop, "n": n}
+    return check_axis(omega, "omega").tolist()
 
 
-def _config_values(config: dict) -> np.ndarray:
+def _n_omega(config: dict) -> int:
     om = config["omega"]
-    return np.linspace(om["start"], om["stop"], om["n"]) if isinstance(om, dict) else np.asarray(om, dtype=float)
+    return int(om["n"]) if isinstance(om, dict) else len(om)
+
+
+def _config_values(config: dict, start: int = 0, stop: int | None = None) -> np.ndarray:
+    """The Omega values [start, stop) of the configuration (as numpy.linspace computes them)."""
+    om = config["omega"]
+    if isinstance(om, dict):
+        return np.linspace(om["start"], om["stop"], om["n"])[start:stop] if om["n"] <= 1_000_000 else \
+            _linspace_slice(om["start"], om["stop"], om["n"], start, om["n"] if stop is None else stop)
+    return np.asarray(om, dtype=float)[start:stop]
+
+
+def _linspace_slice(a: float, b: float, n: int, i0: int, i1: int) -> np.ndarray:
+    step = (b - a) / (n - 1)
+    values = a + np.arange(i0, i1) * step
+    if i1 == n:
+        values[-1] = b
+    return values
 
 
 def _setup_of(config: dict) -> tuple[Setup, InitialState]:
@@ -62,7 +78,7 @@ def run_chunk(config: dict, start: int, stop: int) -> dict:
     """Crossings of the Omega values [start, stop) (module-level: a dask worker runs it from the config)."""
     setup, initial = _setup_of(config)
     sec = poincare.Section(**config["section"])
-    omegas = _config_values(config)[start:stop]
+    omegas = _config_values(config, start, stop)
     out = {k: [] for k in (*PER_OMEGA, *PER_CROSSING)}
     quantity = config["quantity"]
     for om in omegas:
@@ -100,7 +116,7 @@ def bifurcation_diagram(omega, *, quantity: str = "gamma", section: str = "beta_
     with ``output`` the diagram is stored chunk by chunk and a rerun resumes (``overwrite``:
     discard chunks of another configuration).
     """
-    omegas, omega_config = _omega_axis(omega)
+    omega_config = _omega_axis(omega)
     model = ode.EULER
     names = poincare.quantities(model.name)
     if quantity not in names:
@@ -119,8 +135,8 @@ def bifurcation_diagram(omega, *, quantity: str = "gamma", section: str = "beta_
               "omega": omega_config, "t_transient": t_transient, "t_end": t_end, "max_crossings": max_crossings,
               "integrator": {"name": "heyoka.taylor_adaptive", "tol": tol, "fall_angle": fall_angle}}
     crossings = max_crossings if max_crossings is not None else 100 * (t_end - t_transient)
-    sweep = sweeps.Sweep("bifurcation diagram", config, len(omegas), int(chunk_size), (*PER_OMEGA, *PER_CROSSING),
-                         run_chunk, functools.partial(_assemble, config, omegas, sec),
+    sweep = sweeps.Sweep("bifurcation diagram", config, _n_omega(config), int(chunk_size), (*PER_OMEGA, *PER_CROSSING),
+                         run_chunk, functools.partial(_assemble, config, sec),
                          functools.partial(poincare.section_integrator, model.name, sec.quantity, sec.modulo,
                                            sec.direction, float(tol)),
                          unit="Omega value", bytes_per_point=10 + 8 + 40 * crossings,
@@ -129,7 +145,8 @@ def bifurcation_diagram(omega, *, quantity: str = "gamma", section: str = "beta_
                             overwrite=overwrite)
 
 
-def _assemble(config: dict, omegas: np.ndarray, sec: poincare.Section, merged: dict) -> xr.Dataset:
+def _assemble(config: dict, sec: poincare.Section, merged: dict) -> xr.Dataset:
+    omegas = _config_values(config)
     quantity = config["quantity"]
     units, long_name = VARIABLES.get(quantity, ("1", quantity))
     status, valid = merged["status_code"], merged["valid"]

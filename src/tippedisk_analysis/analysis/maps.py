@@ -90,12 +90,12 @@ def stability_map(omega, eps, *, mu=None, e=None, setup: Setup | None = None,
     for name, values in (("mu", mu), ("e", e)):
         if values is not None:
             sweeps[name] = _as_axis(values, name)
-    for name, values in sweeps.items():
-        _validated(setup, name, values)
     shape = (len(omega), *(len(v) for v in sweeps.values()))
     n = int(np.prod(shape, dtype=float))
     check_memory(n * BYTES_PER_POINT, f"a stability map of {n:,} points per branch",
                  "use fewer grid points (smaller N)")
+    for name, values in sweeps.items():
+        _validated(setup, name, values)
     pars = _parameter_grid(setup, sweeps, slip_smoothing, shape)
     om_flat = np.broadcast_to(omega.reshape(-1, *([1] * len(sweeps))), shape).ravel()
 

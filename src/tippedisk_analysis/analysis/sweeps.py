@@ -139,17 +139,19 @@ def _write_config(d: Path, cfg: str) -> None:
 
 
 def _prepare_dir(sweep: Sweep, output, overwrite: bool = False) -> tuple[Path, bool]:
-    """The chunk directory for ``sweep`` (created if missing); True if this call created it."""
+    """The chunk directory for ``sweep`` (created if missing, with config.json, in one rename);
+    True if this call created it."""
     d = chunk_dir(output)
     cfg = json.dumps(sweep.config, sort_keys=True)
-    cfg_file = d / "config.json"
-    if d.exists():
-        try:
-            same = json.loads(cfg_file.read_text()) == json.loads(cfg)
-        except (OSError, ValueError):
-            same = False
-        if not same:
-            if stored_chunks(d) and not overwrite:
+    for _ in range(3):
+        if d.exists():
+            try:
+                same = json.loads((d / "config.json").read_text()) == json.loads(cfg)
+            except (OSError, ValueError):
+                same = False
+            if same:
+                return d, False
+            if (stored_chunks(d) or _others_running(d)) and not overwrite:
                 shown = files.show(d)
                 raise ParameterError(
                     f"'{shown}' holds chunks of a different {sweep.name} configuration; resume it with its "
@@ -157,13 +159,18 @@ def _prepare_dir(sweep: Sweep, output, overwrite: bool = False) -> tuple[Path, b
                     cli=f"'{shown}' holds chunks of a different {sweep.name} configuration; rerun the original "
                         f"command to resume it, give --overwrite to discard it, or give another --output")
             shutil.rmtree(d, ignore_errors=True)  # only a config.json (or overwrite): nothing to lose
-        else:
-            return d, False
-    if not d.parent.is_dir():
-        raise ParameterError(f"directory '{files.show(d.parent)}' does not exist; create it or choose another output")
-    d.mkdir(exist_ok=True)
-    _write_config(d, cfg)
-    return d, True
+        if not d.parent.is_dir():
+            raise ParameterError(f"directory '{files.show(d.parent)}' does not exist; create it or choose another "
+                                 "output")
+        staging = files.temporary_name(d)  # config.json in place before the directory becomes visible
+        staging.mkdir()
+        try:
+            (staging / "config.json").write_text(cfg)
+            os.rename(staging, d)
+            return d, True
+        except OSError:  # another process created it first: use (or refuse) theirs
+            shutil.rmtree(staging, ignore_errors=True)
+    raise ParameterError(f"cannot prepare the chunk directory '{files.show(d)}'; remove it or choose another output")
 
 
 def _write_chunk(d: Path, index: int, start: int, stop: int, res: dict, cfg_hash: str, cfg: str) -> None:

@@ -9,6 +9,7 @@ from .common import finite_float, output_path
 from .registry import command
 
 PANELS = "gamma,z_S,E_tot"
+SUFFIXES = (".gif", ".mp4", ".mkv", ".mov", ".webm", ".avi")
 
 
 def size_type(text: str) -> tuple[int, int]:
@@ -38,11 +39,16 @@ def _arguments(p) -> None:
 @command("animate", "3D animation of a stored simulation (disk, G, S, contact track) -> GIF or MP4", _arguments)
 def animate(args) -> int:
     from .. import results
-    from ..errors import Interrupted
-    from ..plotting.animation import animate as write_animation
+    from ..errors import Interrupted, ParameterError
 
     ds = results.load(args.dataset)
     output = output_path(args, netcdf=False)
+    results.require_samples(ds, "animate")  # checks before matplotlib loads
+    if output.suffix.lower() not in SUFFIXES:
+        raise ParameterError(f"cannot write an animation to {output.suffix or 'a file without suffix'!r}; give "
+                             f"--output with one of {', '.join(SUFFIXES)} (.gif with Pillow, the others with ffmpeg)")
+    from ..plotting.animation import animate as write_animation
+
     panels = () if args.panels.strip().lower() in ("", "none") else tuple(p.strip() for p in args.panels.split(","))
     try:
         path, n = write_animation(ds, output, speed=args.speed, fps=args.fps, size=args.size, panels=panels,

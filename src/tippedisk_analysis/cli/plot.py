@@ -18,15 +18,17 @@ def _arguments(p) -> None:
 
 @command("plot", "draw a stored dataset as a figure (PNG, PDF, SVG, ...)", _arguments)
 def plot(args) -> int:
-    from .. import plotting, results
+    from .. import results
 
     ds = results.load(args.dataset)
-    output = Path(args.output or Path(args.dataset).with_suffix(".png"))
+    output = output_path(args, str(args.output or Path(args.dataset).with_suffix(".png")), netcdf=False)
+    results.require_samples(ds, "draw")  # checks before matplotlib loads
+    from .. import plotting
+
     formats = plotting.file_formats()
     if output.suffix.lower().lstrip(".") not in formats:
         raise ParameterError(f"cannot draw to {output.suffix or 'a file without suffix'!r}; give --output with one of "
                              f"{', '.join('.' + f for f in sorted(formats))}")
-    output = output_path(args, str(output), netcdf=False)
     plotting.plot_dataset(ds, output)
     print(f"{show(output)}: {ds.attrs['kind']} figure")
     return 0

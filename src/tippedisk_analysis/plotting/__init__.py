@@ -13,6 +13,7 @@ import xarray as xr  # noqa: E402
 
 from .. import files  # noqa: E402
 from ..errors import DatasetError  # noqa: E402
+from ..results import require_samples  # noqa: E402
 from . import stability_map, trajectories  # noqa: E402, F401 (registration)
 from .animation import animate  # noqa: E402
 from .registry import FIGURES  # noqa: E402
@@ -42,10 +43,7 @@ def plot_dataset(ds: xr.Dataset, path: str | Path) -> Path:
     kind = ds.attrs.get("kind")
     if kind not in FIGURES:
         raise DatasetError(f"no figure for datasets of kind {kind!r}; plottable kinds: {', '.join(FIGURES)}")
-    empty = [d for d in ("time", "crossing", "point", "omega") if ds.sizes.get(d, None) == 0]
-    if empty:
-        raise DatasetError(f"the {kind} dataset holds no samples (dimension {empty[0]!r} is empty; status "
-                           f"{ds.attrs.get('status', '?')}: {ds.attrs.get('message', '')}); nothing to draw")
+    require_samples(ds, "draw")
     path = Path(path)
     suffix = path.suffix.lower().lstrip(".")
     if suffix not in file_formats():

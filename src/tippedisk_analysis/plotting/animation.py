@@ -30,6 +30,7 @@ from ..errors import DatasetError, ParameterError
 from ..kinematics import rotation_from_euler, rotation_from_quaternion
 from ..parameters import DiskGeometry
 from ..resources import check_memory
+from ..results import require_samples
 from .labels import axis_label
 from .simulation import disk_of
 
@@ -71,9 +72,7 @@ def check_dataset(ds: xr.Dataset) -> dict:
     missing = [n for n in ("x", "y", "z", "alpha", "beta", "gamma") if n not in ds]
     if missing:
         raise DatasetError(f"the simulation lacks {', '.join(missing)}; it is damaged or not one of ours")
-    if ds.sizes.get("time", 0) == 0:
-        raise DatasetError(f"the simulation holds no samples (status {ds.attrs.get('status', '?')}: "
-                           f"{ds.attrs.get('message', '')}); nothing to animate")
+    require_samples(ds, "animate")
     disk = disk_of(ds)
     if disk is None:
         raise DatasetError("the dataset stores no disk parameters (config.setup.disk); it is not a simulation of ours")
