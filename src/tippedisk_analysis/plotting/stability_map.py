@@ -8,6 +8,7 @@ import xarray as xr
 from matplotlib.colors import SymLogNorm
 
 from ..analysis.maps import critical_speed_curves
+from .labels import axis_label
 from .registry import figure
 
 
@@ -39,20 +40,17 @@ def stability_map_figure(ds: xr.Dataset, eps_index: int | None = None):
             ax.contour(omega, eps, mre, levels=[0.0], colors="k", linewidths=0.8)
             fig.colorbar(mesh, ax=ax, label=r"max Re $s$ [1/s]")
             for c in range(oc.shape[1]):
-                ax.plot(oc[:, c], eps, "o", ms=3, color="gold", mec="k", mew=0.4,
-                        label=r"$\Omega_c(\varepsilon)$" if c == 0 else None)
+                ax.plot(oc[:, c], eps, "o", ms=3, color="gold", mec="k", mew=0.4)
             ax.axhline(eps[k], color="0.4", ls=":", lw=0.8)
-            ax.set(xlabel=r"spin rate $\Omega$ [rad/s]", ylabel=r"$\varepsilon$ [m/s]",
+            ax.set(xlabel=axis_label("omega", "rad s-1"), ylabel=axis_label("eps", "m s-1"),
                    title=f"{branch}: growth rate (red unstable, blue stable)")
         else:  # a single eps: the growth rate as a curve (first eps if only one Omega)
             ax.plot(omega, mre[0], "-", color="k")
-            ax.axhline(0.0, color="0.5", lw=0.8)
-            ax.plot(oc[0], np.zeros_like(oc[0]), "o", color="gold", mec="k", label=r"$\Omega_c$")
+            ax.axhline(0.0, color="k", lw=0.8)
+            ax.plot(oc[0], np.zeros_like(oc[0]), "o", color="gold", mec="k", ms=3)
             ax.set_yscale("symlog", linthresh=0.1)
-            ax.set(xlabel=r"spin rate $\Omega$ [rad/s]", ylabel=r"max Re $s$ [1/s]",
-                   title=f"{branch}: growth rate at eps = {eps[0]:g} m/s")
-        if np.isfinite(oc).any():
-            ax.legend(loc="upper right", fontsize=8)
+            ax.set(xlabel=axis_label("omega", "rad s-1"), ylabel=r"max Re $s$ [1/s]",
+                   title=rf"{branch}: growth rate at $\varepsilon$ = {eps[0]:g} m/s")
         ax = axes[1, j]
         re = b["eig_real"].isel(eps=k).transpose("omega", "eig").values
         for i in range(re.shape[1]):
@@ -61,7 +59,22 @@ def stability_map_figure(ds: xr.Dataset, eps_index: int | None = None):
         for oc_k in oc[k][np.isfinite(oc[k])]:
             ax.axvline(oc_k, color="gold", lw=1.2)
         ax.set_yscale("symlog", linthresh=0.1)
-        ax.set(xlabel=r"spin rate $\Omega$ [rad/s]", ylabel=r"Re $s_k$ [1/s]",
-               title=f"{branch}: eigenvalue real parts at eps = {eps[k]:g} m/s")
+        ax.set(xlabel=axis_label("omega", "rad s-1"), ylabel=r"Re $s_k$ [1/s]",
+               title=rf"{branch}: eigenvalue real parts at $\varepsilon$ = {eps[k]:g} m/s")
+    fig.legend(handles=_legend_handles(len(omega) > 1 and len(eps) > 1), loc="outside lower center", ncol=4,
+               fontsize=8, frameon=False)
     fig.suptitle("Stationary spinning solutions, ODE Model 1 reduced" + (f" ({fixed})" if fixed else ""))
     return fig
+
+
+def _legend_handles(map_2d: bool) -> list:
+    """One legend for all panels, outside the data: what the markers and the reference lines mean."""
+    from matplotlib.lines import Line2D
+
+    handles = [Line2D([], [], ls="none", marker="o", color="gold", mec="k", ms=4,
+                      label=r"critical spin speeds $\Omega_c$ (max Re $s$ = 0, refined)"),
+               Line2D([], [], color="gold", lw=1.2, label=r"$\Omega_c$ at the lower panels' $\varepsilon$"),
+               Line2D([], [], color="k", lw=0.8, label=r"Re $s$ = 0 (zero contour in the maps)")]
+    if map_2d:
+        handles.append(Line2D([], [], color="0.4", ls=":", lw=0.8, label=r"$\varepsilon$ of the lower panels"))
+    return handles

@@ -6,6 +6,7 @@ import matplotlib.pyplot as plt
 import xarray as xr
 from matplotlib.colors import BoundaryNorm, ListedColormap
 
+from .labels import axis_label
 from .registry import figure
 
 
@@ -15,8 +16,8 @@ def poincare_figure(ds: xr.Dataset):
     fig, axes = plt.subplots(1, 2, figsize=(10, 4.5), constrained_layout=True)
     for ax, (x, y) in zip(axes, (("gamma", "gamma_dot"), ("beta", "gamma"))):
         sc = ax.scatter(ds[x], ds[y], c=ds["time"], s=8, cmap="viridis")
-        ax.set(xlabel=f"{x} [{ds[x].attrs.get('units', '')}]", ylabel=f"{y} [{ds[y].attrs.get('units', '')}]")
-    fig.colorbar(sc, ax=axes, label="time t [s]")
+        ax.set(xlabel=axis_label(x, ds[x].attrs.get("units", "")), ylabel=axis_label(y, ds[y].attrs.get("units", "")))
+    fig.colorbar(sc, ax=axes, label=axis_label("time", "s"))
     fig.suptitle(f"Poincaré section {ds.attrs.get('section', '')} ({ds.attrs.get('direction', '')}): "
                  f"{ds.attrs.get('n_crossings', 0)} crossings, {ds.attrs.get('status', '')}")
     return fig
@@ -42,9 +43,9 @@ def outcome_map_figure(ds: xr.Dataset):
     t_inv = ds["inversion_time"].isel(sel)
     masked = t_inv.where(t_inv >= 0)  # fill value -1: no inversion (figure only)
     mesh = axes[1].pcolormesh(ds[x], ds[y], masked.transpose(y, x), shading="nearest", cmap="magma")
-    fig.colorbar(mesh, ax=axes[1], label="inversion time [s] (blank: none)")
-    for ax, title in zip(axes, ("outcome", "first upward crossing of gamma = 0")):
-        ax.set(xlabel=f"{x} [{ds[x].attrs.get('units', '')}]", ylabel=f"{y} [{ds[y].attrs.get('units', '')}]",
+    fig.colorbar(mesh, ax=axes[1], label="inversion time $t$ [s] (blank: none)")
+    for ax, title in zip(axes, ("outcome", r"first upward crossing of $\gamma$ = 0")):
+        ax.set(xlabel=axis_label(x, ds[x].attrs.get("units", "")), ylabel=axis_label(y, ds[y].attrs.get("units", "")),
                title=title)
     extra = ", ".join(f"{d} = {float(ds[d][0]):g}" for d in dims[2:])
     fig.suptitle(f"Outcome map, {ds.attrs.get('paper_model', '')}, runs of {ds.attrs.get('t_end', '')} s"
@@ -57,7 +58,9 @@ def bifurcation_figure(ds: xr.Dataset):
     """Brute-force bifurcation diagram: the recorded quantity at the crossings against Omega."""
     fig, ax = plt.subplots(figsize=(8, 5), constrained_layout=True)
     ax.plot(ds["omega_of_point"], ds["value"], ".", color="k", markersize=2, linestyle="none")
-    ax.set(xlabel=r"initial spin $\Omega$ [rad/s]",
-           ylabel=f"{ds.attrs.get('quantity', '')} [{ds['value'].attrs.get('units', '')}]",
+    quantity = ds.attrs.get("quantity", "")
+    wrapped = ", wrapped into (-pi, pi]" if "wrapped" in ds["value"].attrs.get("long_name", "") else ""
+    ax.set(xlabel=axis_label("omega", "rad s-1") + " at t = 0",
+           ylabel=axis_label(quantity, ds["value"].attrs.get("units", "")) + wrapped,
            title=f"crossings of {ds.attrs.get('section', '')} ({ds.attrs.get('direction', '')}) after transients")
     return fig
