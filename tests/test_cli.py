@@ -1,3 +1,5 @@
+import dataclasses
+
 import pytest
 
 import tippedisk_analysis as td
@@ -83,3 +85,85 @@ def test_range_errors_name_the_option(tmp_path, capsys):
     assert _exit_code(["outcome-map", "--omega", "10:80", "--eps", "0.1:0.2:2", "--output", str(out)]) == 2
     assert "--omega '10:80' is not START:STOP:N" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_existing_output_needs_overwrite(tmp_path, capsys):
+    out = tmp_path / "run.nc"
+    argv = ["simulate", "--t-end", "0.05", "--output", str(out)]
+    assert main(argv) == 0
+    before = out.read_bytes()
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "exists; give --overwrite to replace it, or another --output" in err and err.count("\n") == 1
+    assert out.read_bytes() == before
+    assert main([*argv, "--mu", "0.2", "--overwrite"]) == 0
+    assert td.results.config_of(td.load(out))["setup"]["friction"]["mu"] == 0.2
+
+
+def _disk(path):
+    return td.results.config_of(td.load(path))["setup"]["disk"]
+
+
+def test_disk_from_table2_geometry_or_values(tmp_path):
+    run = ["simulate", "--t-end", "0.02"]
+    assert main([*run, "-o", str(tmp_path / "t2.nc")]) == 0
+    assert _disk(tmp_path / "t2.nc") == {**dataclasses.asdict(td.Disk()), "geometry": None}
+    assert main([*run, "--disk", "geometry", "--hole-offset", "0.024", "-o", str(tmp_path / "g.nc")]) == 0
+    geo = _disk(tmp_path / "g.nc")
+    expected = td.Disk.from_geometry(b=0.024)
+    assert geo["geometry"] == {"rho": 7700.0, "r": 0.045, "a": 0.015, "b": 0.024, "h": 0.01}
+    assert (geo["m"], geo["e"], geo["B"]) == (expected.m, expected.e, expected.B)
+    assert td.load(tmp_path / "g.nc").attrs["disk_source"] == "geometry"
+    values = ["--mass", "0.4", "--e", "0.002", "--radius", "0.04", "--A", "2e-4", "--B", "1.8e-4", "--C", "3.7e-4"]
+    assert main([*run, "--disk", "given", *values, "-o", str(tmp_path / "v.nc")]) == 0
+    assert _disk(tmp_path / "v.nc") == {"m": 0.4, "e": 0.002, "r": 0.04, "A": 2e-4, "B": 1.8e-4, "C": 3.7e-4,
+                                        "geometry": None}
+    assert main([*run, "--mass", "0.87", "-o", str(tmp_path / "m.nc")]) == 0  # same shape, twice the density
+    heavy = _disk(tmp_path / "m.nc")
+    assert heavy["m"] == 0.87 and heavy["A"] == pytest.approx(2 * 0.249e-3) and heavy["e"] == 2.5e-3
+
+
+def test_disk_options_reach_every_command(tmp_path):
+    geo = ["--disk", "geometry", "--hole-offset", "0.024"]
+    drilled = dataclasses.asdict(td.Disk.from_geometry(b=0.024))
+    commands = {
+        "p.nc": ["poincare", "--t-end", "0.3", *geo],
+        "b.nc": ["bifurcation", "--omega", "40:50:2", "--t-transient", "0.1", "--t-end", "0.3", *geo],
+        "o.nc": ["outcome-map", "--omega", "40:50:2", "--eps", "0.1", "--t-end", "0.2", *geo],
+        "s.nc": ["stability-map", "--omega", "30:40:3", "--eps", "0.1", *geo],
+    }
+    for name, argv in commands.items():
+        assert main([*argv, "-o", str(tmp_path / name)]) == 0, name
+        assert _disk(tmp_path / name) == drilled, name
+
+
+def test_eccentricity_sweeps_say_what_they_hold(tmp_path):
+    assert main(["stability-map", "--omega", "30:40:2", "--eps", "0.1", "--e", "0.002:0.003:2", "--disk", "geometry",
+                 "-o", str(tmp_path / "g.nc")]) == 0
+    assert main(["outcome-map", "--omega", "30:40:2", "--eps", "0.1", "--e", "0.002:0.003:2", "--t-end", "0.2",
+                 "-o", str(tmp_path / "t.nc")]) == 0
+    g, t = td.load(tmp_path / "g.nc"), td.load(tmp_path / "t.nc")
+    assert "hole offset b moved" in g["e"].attrs["comment"] and "hole offset" in td.results.config_of(g)["e_sweep"]
+    assert "A, B, C about G held fixed" in t["e"].attrs["comment"] and "held fixed" in t.attrs["e_sweep"]
+
+
+def test_interrupt_in_process_returns_130_with_one_line(tmp_path, capsys, monkeypatch):
+    from tippedisk_analysis.solvers import taylor
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(taylor, "integrate", interrupted)
+    assert main(["simulate", "--t-end", "0.05", "-o", str(tmp_path / "run.nc")]) == 130
+    err = capsys.readouterr().err
+    assert err == "tippedisk simulate: interrupted; nothing stored (ODE runs keep no checkpoint: rerun to start again)\n"
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_help_texts_name_values_and_units(capsys):
+    for argv in (["study", "--help"], ["bifurcation", "--help"], ["simulate", "--help"]):
+        assert _exit_code(argv) == 0
+    out = capsys.readouterr().out
+    assert "fig13_ode_inversion" in out  # study --help lists the studies
+    assert "which crossings of the section count" in out and "one of x, y, z, alpha" in out
+    assert "rate alpha_dot(0) = spin Omega [rad/s]" in out and "Euler angle beta(0), inclination [rad]" in out

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from tippedisk_analysis import Disk, Friction, InitialState, ParameterError, Setup
+from tippedisk_analysis.parameters import DiskGeometry
 
 
 def test_table2_from_geometry_of_table1():
@@ -117,3 +118,98 @@ def test_initial_state_rejects_flat_disk(beta):
 def test_setup_rejects_nonpositive_gravity():
     with pytest.raises(ParameterError, match="gravity"):
         Setup(gravity=0.0)
+
+
+@pytest.mark.parametrize("build, fragment", [
+    (lambda: Friction(mu="0.3"), "Friction.mu = '0.3' is a str; give a number"),
+    (lambda: Disk(m=None), "Disk.m = None is a NoneType"),
+    (lambda: InitialState(alpha_dot=True), "InitialState.alpha_dot = True is a bool"),
+    (lambda: Setup(disk={"m": 0.4}), "Setup.disk = {'m': 0.4} must be a Disk"),
+    (lambda: Setup(gravity="9.81"), "gravity = '9.81' m/s^2 must be a positive number"),
+])
+def test_wrong_types_are_parameter_errors_naming_the_fix(build, fragment):
+    with pytest.raises(ParameterError) as info:
+        build()
+    assert fragment in str(info.value) and "--" not in str(info.value)
+
+
+def test_api_fronts_refuse_wrong_types_in_api_words(tmp_path):
+    import tippedisk_analysis as td
+    from tippedisk_analysis.analysis.outcome_map import outcome_map
+
+    with pytest.raises(ParameterError, match=r"setup must be a Setup, not dict; give e.g. Setup\("):
+        td.simulate(setup={"disk": {}})
+    with pytest.raises(ParameterError, match="initial must be an InitialState"):
+        td.simulate(initial={"alpha_dot": 40.0})
+    with pytest.raises(td.DatasetError, match="save needs an xarray.Dataset"):
+        td.save({"a": 1}, tmp_path / "a.nc")
+    with pytest.raises(ParameterError, match="cannot sweep 'zeta'") as info:
+        outcome_map({"omega": (10, 80, 4), "zeta": (0, 1, 2)})
+    assert "--" not in str(info.value)
+    with pytest.raises(ParameterError, match=r"ranges=\{'omega'") as info:
+        outcome_map({"omega": (10, 80, 4)})
+    assert "--" not in str(info.value) and info.value.cli_message().endswith("give --omega and --eps")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_geometry_travels_with_the_disk():
+    disk = Disk.from_geometry()
+    assert disk.geometry == DiskGeometry() and disk.source == "geometry" and Disk().source == "values"
+    assert Disk(**dataclasses.asdict(disk)) == disk  # a stored configuration rebuilds it
+    with pytest.raises(ParameterError, match="does not match its geometry"):
+        dataclasses.replace(disk, e=3e-3)  # would silently contradict the hole
+
+
+def test_eccentricity_of_a_drilled_disk_moves_the_hole():
+    disk = Disk.from_geometry()
+    moved = disk.with_eccentricity(3e-3)
+    g = moved.geometry
+    assert (g.rho, g.r, g.a, g.h) == (7700.0, 0.045, 0.015, 0.01)
+    assert g.b == pytest.approx(3e-3 * (0.045**2 - 0.015**2) / 0.015**2)  # b = e (r^2 - a^2) / a^2
+    assert moved.e == pytest.approx(3e-3) and moved == Disk.from_geometry(b=g.b)
+    assert moved.m == pytest.approx(disk.m) and moved.A == pytest.approx(disk.A)  # the hole only moved
+    assert moved.B < disk.B and moved.C < disk.C
+    with pytest.raises(ParameterError, match="hole offset"):
+        disk.with_eccentricity(0.01)  # b = 0.08 m: the hole would leave the disk
+
+
+def test_eccentricity_of_a_disk_given_by_values_keeps_the_inertia_about_G():
+    moved = Disk().with_eccentricity(3e-3)
+    assert (moved.m, moved.A, moved.B, moved.C, moved.e) == (0.435, 0.249e-3, 0.227e-3, 0.468e-3, 3e-3)
+    assert "inertia A, B, C about G held fixed" in Disk().eccentricity_rule
+    assert "hole offset b moved" in Disk.from_geometry().eccentricity_rule
+
+
+def test_mass_scales_the_inertia_consistently():
+    heavy = Disk().with_mass(0.87)
+    assert heavy.A == pytest.approx(2 * 0.249e-3) and heavy.C == pytest.approx(2 * 0.468e-3)
+    for name, value in heavy.inertia_S.items():  # about S as well: the same shape, twice the density
+        assert value == pytest.approx(2 * Disk().inertia_S[name])
+    drilled = Disk.from_geometry()
+    denser = drilled.with_mass(0.87)  # a drilled disk changes its density
+    assert denser.m == pytest.approx(0.87) and denser.geometry.rho == pytest.approx(7700.0 * 0.87 / drilled.m)
+    assert denser.e == pytest.approx(drilled.e)
+
+
+def test_eccentricity_columns_match_single_disks():
+    from tippedisk_analysis.parameters import eccentricity_columns
+
+    disk = Disk.from_geometry()
+    columns = eccentricity_columns(disk, [2e-3, 3e-3])
+    for k, e in enumerate((2e-3, 3e-3)):
+        single = disk.with_eccentricity(e)
+        assert {name: columns[name][k] for name in columns} == pytest.approx(
+            {name: getattr(single, name) for name in columns})
+
+
+def test_stability_map_over_e_equals_maps_of_single_drilled_disks():
+    from tippedisk_analysis.analysis import maps
+
+    setup = Setup(disk=Disk.from_geometry())
+    swept = maps.stability_map([30.0, 40.0], [0.1], e=[2e-3, 3e-3], setup=setup, critical=False, progress=False)
+    assert "hole offset b moved" in swept["e"].attrs["comment"]
+    for k, e in enumerate((2e-3, 3e-3)):
+        single = maps.stability_map([30.0, 40.0], [0.1], setup=Setup(disk=setup.disk.with_eccentricity(e)),
+                                    critical=False, progress=False)
+        np.testing.assert_array_equal(swept["max_real_eig"].isel(e=k).values,
+                                      single["max_real_eig"].values)

@@ -1,4 +1,5 @@
 import json
+import os
 
 import numpy as np
 import pytest
@@ -59,3 +60,68 @@ def test_load_rejects_foreign_files(tmp_path):
         td.load(foreign)
     with pytest.raises(td.DatasetError, match="does not exist"):
         td.load(tmp_path / "missing.nc")
+
+
+def test_temporary_names_are_unique_per_process_and_call(tmp_path):
+    from tippedisk_analysis.files import temporary_name
+
+    a, b = temporary_name(tmp_path / "run.nc"), temporary_name(tmp_path / "run.nc")
+    assert a != b and a.parent == tmp_path and a.name.startswith(f".run.nc.{os.getpid()}.") and a.suffix == ".part"
+
+
+@pytest.mark.parametrize("target, fragment", [("adir", "is a directory"), ("/dev/null", "not a regular file"),
+                                              ("missing/run.nc", "does not exist"),
+                                              ("/sys/run.nc", "cannot create files")])
+def test_save_refuses_paths_it_cannot_write(short_run, tmp_path, target, fragment):
+    (tmp_path / "adir").mkdir()
+    path = target if target.startswith("/") else tmp_path / target
+    with pytest.raises(td.TippediskError, match=fragment) as info:
+        td.save(short_run, path)
+    assert "--" not in str(info.value)  # API wording; the CLI's is in cli_message()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["adir"]
+
+
+def test_save_replaces_unless_told_not_to(short_run, tmp_path):
+    path = tmp_path / "run.nc"
+    path.write_text("old")
+    with pytest.raises(td.TippediskError, match="exists; pass overwrite=True") as info:
+        td.save(short_run, path, overwrite=False)
+    assert "give --overwrite" in info.value.cli_message()
+    assert path.read_text() == "old"
+    td.save(short_run, path)  # the Python default replaces, as xarray's to_netcdf does
+    xr.testing.assert_identical(td.load(path), short_run)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.nc"]
+
+
+def test_failed_write_leaves_nothing(tmp_path):
+    from tippedisk_analysis.files import atomic_write
+
+    def write(tmp):
+        tmp.write_text("half")
+        raise OSError(28, "No space left on device")
+
+    with pytest.raises(td.TippediskError, match="No space left on device"):
+        atomic_write(tmp_path / "x.nc", write)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_stale_temporary_files_of_dead_processes_are_removed(tmp_path):
+    from tippedisk_analysis.files import check_output
+
+    dead = tmp_path / ".run.nc.999999999.deadbeef.part"  # no such pid
+    mine = tmp_path / f".run.nc.{os.getpid()}.cafe0123.part"
+    dead.write_text("x")
+    mine.write_text("x")
+    check_output(tmp_path / "run.nc")
+    assert not dead.exists() and mine.exists()
+
+
+def test_load_refuses_directories_and_non_utf8_names(tmp_path):
+    with pytest.raises(td.DatasetError, match="is a directory"):
+        td.load(tmp_path)
+    bad = tmp_path / os.fsdecode(b"\xff.nc")
+    bad.write_bytes(b"x")
+    with pytest.raises(td.DatasetError, match=r"'.*\\xff.nc' is not a valid UTF-8 file name"):
+        td.load(bad)
+    with pytest.raises(td.DatasetError, match="give a file name"):
+        td.load(3)
