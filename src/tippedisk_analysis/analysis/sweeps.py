@@ -360,7 +360,7 @@ def _announce(sweep: Sweep, n_todo: int, workers: int, progress: bool) -> None:
     """One line on stderr before long work (estimated from ``seconds_per_point``)."""
     seconds = n_todo * sweep.seconds_per_point / max(workers, 1)
     if progress and seconds > 600:
-        print(f"{sweep.name}: {n_todo:,} {sweep.unit}s, about {resources.human_time(seconds)} on {workers} "
+        print(f"{sweep.name}: {n_todo:,} {sweep.unit}s, up to about {resources.human_time(seconds)} on {workers} "
               "worker(s) (estimate); finished chunks are stored, Ctrl-C and the same call resume",
               file=sys.stderr)
 
