@@ -5,7 +5,7 @@ from __future__ import annotations
 import dataclasses
 
 from .. import defaults
-from ..files import show
+from ..files import remove_stale_parts, show
 from .common import add_disk, add_output, disk_from_args, finite_float, output_path, positive_int
 from .registry import command
 
@@ -86,6 +86,7 @@ def simulate(args) -> int:
     checkpoint = None
     if "checkpoint" in info.options:  # a long run killed midway resumes when the command is repeated
         checkpoint = options["checkpoint"] = str(output) + ".checkpoint.npz"
+        remove_stale_parts(checkpoint)  # temporary checkpoint files of a run killed with kill -9
     try:
         try:
             ds = run_model(info.name, args.t_end, setup=setup, initial=initial, **options)
