@@ -70,6 +70,14 @@ def output_path(args, path: str | None = None, netcdf: bool = True) -> Path:
     return files.check_output(path if path is not None else args.output, overwrite=args.overwrite, netcdf=netcdf)
 
 
+def writable(path: str) -> Path:
+    """The output path checked before any work starts, replacing an existing file (older commands).
+
+    Prefer :func:`output_path` with :func:`add_output`, which refuses an existing output without
+    ``--overwrite`` like every other command."""
+    return files.check_output(path, overwrite=True)
+
+
 def add_initial_and_friction(p: argparse.ArgumentParser, omega: bool = True) -> None:
     """Options of one trajectory of ODE Model 1 from the Table 3 start (Poincaré sections, bifurcation diagrams)."""
     if omega:
