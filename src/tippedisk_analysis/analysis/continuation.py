@@ -298,6 +298,13 @@ def continue_branch(problem: Problem, u0: np.ndarray, options: Options = Options
         crossed = _first_bound_crossed(problem, last.u, new.u)
         if crossed is not None:
             end = _locate_bound(problem, last, ds, crossed, options)
+            if end is None:  # the corrector fails between the last point and the bound: try a shorter step
+                ds *= 0.5
+                if ds < options.ds_min:
+                    status, message = "corrector_failed", (f"the corrector failed before the bound "
+                                                           f"{problem.names[crossed[0]]} = {crossed[1]:g}")
+                    break
+                continue
             if detect:
                 _detect_and_locate(problem, last, end, special, points, options)
             points.append(end)
@@ -327,15 +334,21 @@ def _first_bound_crossed(problem: Problem, u_old, u_new):
     return None
 
 
-def _locate_bound(problem, last: Point, ds: float, crossed, options) -> Point:
+def _locate_bound(problem, last: Point, ds: float, crossed, options) -> Point | None:
+    """The branch point on the bound (Brent on the arclength); None if the corrector fails there."""
     index, bound = crossed
 
     def g(sigma):
         u = _step_to(problem, last, sigma, options)
         return (u[index] - bound) if u is not None else math.nan
 
-    sigma = brentq(g, 0.0, ds, xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200) if g(0.0) != 0 else 0.0
+    try:
+        sigma = brentq(g, 0.0, ds, xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200) if g(0.0) != 0 else 0.0
+    except ValueError:  # the corrector failed inside the step
+        return None
     u = _step_to(problem, last, sigma, options)
+    if u is None:
+        return None
     u[index] = bound  # exact: the corrector solved to round-off
     return _make_point(problem, u, last.tangent, last.arclength + sigma, 0, "bound")
 

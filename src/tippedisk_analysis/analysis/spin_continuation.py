@@ -211,6 +211,12 @@ def branch_dataset(br: continuation.Branch, prob: EquilibriumProblem, setup: Set
         "newton_iterations": ("point", br.array("newton_iterations").astype(np.int32),
                               {"units": "1", "long_name": "corrector iterations"}),
     }
+    if prob.critical == "hopf":
+        kappa = [float(np.prod(p.eigenvalues[prob._critical_indices(p.eigenvalues)]).real) for p in br.points]
+        data["critical_product"] = ("point", np.array(kappa), {
+            "units": "s-2", "long_name": "product of the critical pair of eigenvalues",
+            "comment": "omega^2 > 0 on the Hopf curve; < 0 on its continuation beyond a Bogdanov-Takens point, "
+                       "a neutral saddle (a real pair s, -s: no bifurcation)"})
     data.update(_special_table(br, prob, setup))
     ds = xr.Dataset(data, coords={
         "point": ("point", np.arange(len(u), dtype=np.int32), {"long_name": "point along the branch"}),

@@ -12,7 +12,8 @@ import sys
 
 from ..errors import TippediskError
 from ..version import __version__
-from . import bifurcation, outcome_map, plot, poincare, simulate, stability_map, study  # noqa: F401 (registration)
+from . import (bifurcation, continuation, outcome_map, plot, poincare, simulate, stability_map,  # noqa: F401
+               study)  # registration
 from .registry import COMMANDS
 
 
