@@ -488,3 +488,29 @@ def test_interrupted_run_resumes_from_its_checkpoint(tmp_path, monkeypatch):
     for name in reference.data_vars:
         np.testing.assert_array_equal(resumed[name].values, reference[name].values, err_msg=name)
     assert resumed.attrs["n_steps"] == reference.attrs["n_steps"]
+
+
+# ------------------------------------------------------------ Coulomb-Contensou torque share (diagnostic variant)
+
+
+@pytest.mark.parametrize("model, value", [("m3", -0.1), ("m3", 1.5), ("m3", True), ("m3", "0"), ("m3", float("nan")),
+                                          ("m1", 0.5), ("m8", 0.0)])
+def test_contensou_torque_share_is_validated(model, value):
+    with pytest.raises(ParameterError, match="contensou_torque_share"):
+        simulate(model, 0.01, contensou_torque_share=value)
+
+
+def test_contensou_torque_share_is_stored_and_removes_only_the_torque():
+    """The share is stored with Models 3/4 (not with others); share 1 is the law bitwise; share 0 keeps the
+    prox impulse P_tau (the ball still couples spin and slip) but the disk's spin no longer feels it."""
+    law = simulate("m3", 0.05, store_every=100)
+    one = simulate("m3", 0.05, store_every=100, contensou_torque_share=1.0)
+    zero = simulate("m3", 0.05, store_every=100, contensou_torque_share=0.0)
+    assert results.config_of(law)["integrator"]["contensou_torque_share"] == 1.0
+    assert results.config_of(zero)["integrator"]["contensou_torque_share"] == 0.0
+    assert "contensou_torque_share" not in results.config_of(simulate("m1", 0.01))["integrator"]
+    for name in law.data_vars:
+        np.testing.assert_array_equal(one[name].values, law[name].values, err_msg=name)
+    assert float(np.max(np.abs(zero.P_tau.isel(contact=0)))) > 0  # the prox impulse is still there
+    # the pivoting torque slows the spin: without it alpha_dot stays higher
+    assert float(zero.alpha_dot[-1]) > float(law.alpha_dot[-1])
