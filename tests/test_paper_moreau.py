@@ -54,17 +54,19 @@ def test_model1_does_not_invert_to_r_plus_e(runs):
     assert -5e-9 < float(ds.g_N1.min()) and float(ds.g_N1.max()) < 1e-10
 
 
-def test_model2_does_not_invert_to_r_plus_e(runs):
-    """Sect. 6.1: the quaternion Model 2 behaves like Model 1; without normalisation its gap drifts
-    downwards (Fig. 8: constraint drift), which lowers z_S a little."""
-    ds = runs("m2")
+@pytest.mark.parametrize("normalize", [True, False])
+def test_model2_does_not_invert_to_r_plus_e(runs, normalize):
+    """Sect. 6.1: the quaternion Model 2 behaves like Model 1; its gap drifts downwards (Fig. 8: "the
+    height of the contact point C1 decreases monotonically", no gap correction), with or without the
+    quaternion normalisation of Sect. 3.2 (which removes the larger, |p|-driven part of the drift)."""
+    ds = runs("m2", normalize_quaternion=normalize)
     assert float(ds.z_S.max()) < DISK.r
     assert 0.043 <= float(ds.z_S.sel(time=slice(1.0, 5.0)).mean()) <= 0.045
     drift = [float(ds.g_N1.sel(time=slice(t, t + 1.0)).mean()) for t in (0.0, 2.0, 4.0)]
-    assert drift[0] > drift[1] > drift[2] and drift[2] < -1e-4
+    assert drift[0] > drift[1] > drift[2] and drift[2] < (-5e-5 if normalize else -3e-4)
 
 
-@pytest.mark.parametrize("name, options", [("m5", {}), ("m6", {"normalize_quaternion": True})])
+@pytest.mark.parametrize("name, options", [("m5", {}), ("m6", {})])
 def test_smooth_coulomb_models_invert_to_r_plus_e(runs, name, options):
     """Sect. 6.3: z_S exceeds 0.047 m within the inversion (< 1 s) and stays near r + e = 0.0475 m."""
     ds = runs(name, **options)

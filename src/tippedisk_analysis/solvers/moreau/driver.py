@@ -106,7 +106,8 @@ def integrate(model: MoreauModel, setup: Setup, initial: InitialState, t_end: fl
               tol: float = defaults.MOREAU_TOL, store_every: int | None = None,
               max_iter: int = defaults.MOREAU_MAX_ITER, r_N: float = defaults.MOREAU_GAINS["r_N"],
               r_T: float = defaults.MOREAU_GAINS["r_T"], r_tau: float = defaults.MOREAU_GAINS["r_tau"],
-              r_R: float = defaults.MOREAU_GAINS["r_R"], normalize_quaternion: bool = False,
+              r_R: float = defaults.MOREAU_GAINS["r_R"],
+              normalize_quaternion: bool = defaults.MOREAU_NORMALIZE_QUATERNION,
               fall_angle: float | None = None, progress: bool | None = None, state=None,
               checkpoint: str | os.PathLike | None = None, contensou_torque_share: float = 1.0):
     """Run the step loop; returns (stored rows, status code, failures, steps, wall time, options used).
@@ -117,6 +118,9 @@ def integrate(model: MoreauModel, setup: Setup, initial: InitialState, t_end: fl
     wall time; a later call with the same arguments resumes from it (finished steps are not
     redone, the result is bitwise that of an uninterrupted run), and it is removed at the end.
 
+    ``normalize_quaternion`` (quaternion Models 2, 4, 6, 8, 10): p <- p / |p| after each step, as the
+    paper prescribes after (3.67) (default); False keeps the unnormalised scheme for drift studies.
+
     ``contensou_torque_share`` (Models 3/4 only; a diagnostic variant, not a friction law): the share
     in [0, 1] of the Coulomb-Contensou pivoting torque eps_i P_tau that acts on the disk. 1 (default)
     is the law (2.24)-(2.27). Below 1 the spin still regularises the sliding force through the ball
@@ -126,6 +130,10 @@ def integrate(model: MoreauModel, setup: Setup, initial: InitialState, t_end: fl
     stored P_tau is the prox impulse either way.
     """
     share = _validate_torque_share(model, contensou_torque_share)
+    if not (isinstance(normalize_quaternion, bool | np.bool_) or normalize_quaternion in (0, 1)):
+        raise ParameterError(f"normalize_quaternion = {normalize_quaternion!r} must be True (default, Sect. 3.2 "
+                             "after (3.67)) or False (the unnormalised drift study)")
+    normalize_quaternion = bool(normalize_quaternion)
     if store_every is None:
         store_every = max(1, int(round(defaults.MOREAU_STORE_INTERVAL / dt)))
     if fall_angle is None:
