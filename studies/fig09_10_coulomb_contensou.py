@@ -21,11 +21,13 @@ from tippedisk_studies._common import (CONTENSOU_VARIANT, LAW_LABEL, VARIANT_LAB
 def main(output_dir: str = "output", quick: bool = False):
     out = prepare(output_dir)
     t_end = 0.3 if quick else 5.0
-    for tag, suffix, options, label in (("variant", "", CONTENSOU_VARIANT, VARIANT_LABEL), ("law", "law", {}, LAW_LABEL)):
+    for tag, suffix, options, label in (("variant", "", CONTENSOU_VARIANT, VARIANT_LABEL),
+                                        ("law", "law", {}, LAW_LABEL)):
         m3, m4, m4u = model_pair(out, "m3", "m4", (9, 10), t_end=t_end, options=options, tag=tag, figure_suffix=suffix,
                                  gap_reference=-1.36e-5, title=f"Models 3/4, Coulomb-Contensou, {label}")
         print(f"Models 3/4, {label}:")
-        print(f"  Model 3: gamma first within 0.2 rad of pi/2 at t = {fmt_time(inversion_time(m3))} s (paper: within 0.5 s); "
+        print(f"  Model 3: gamma first within 0.2 rad of pi/2 at t = {fmt_time(inversion_time(m3))} s "
+              "(paper: within 0.5 s); "
               f"z_S(t_end) = {float(m3.z_S[-1]) * 1e3:.2f} mm (r + e = 47.5 mm)")
         if not quick:
             print(f"  Model 3: gamma amplitude {amplitude(m3, 1, 2):.3f} rad on [1, 2] s -> {amplitude(m3, 4, 5):.3f} "

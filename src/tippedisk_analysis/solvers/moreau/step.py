@@ -35,7 +35,8 @@ from ...defaults import CONTOUR_REGULARISATION
 from ...models import moreau_geometry as geo
 from . import force_laws as law
 from .layout import (A_S, B_S, C_S, COL_GAP, COL_IMPULSE, COL_ITER_MAX, COL_ITER_MEAN, COL_N_CLOSED, COL_Q,
-                     COL_TIME, COL_U, CONTACT_RADIUS, CONTENSOU_TORQUE_SHARE, DT, E, E_N, E_R, E_T, E_TAU, EPS, GRAVITY, IMPULSE_N,
+                     COL_TIME, COL_U, CONTACT_RADIUS, CONTENSOU_TORQUE_SHARE, DT, E, E_N, E_R, E_T, E_TAU, EPS, GRAVITY,
+                     IMPULSE_N,
                      IMPULSE_R, IMPULSE_TAU, IMPULSE_TX, IMPULSE_TY, LAW, M, MAX_COLUMNS, MAX_ITER, MU, MU_R,
                      MU_TAU, N_CONTACTS, N_IMPULSES, NORMALIZE_QUATERNION, PARAMETERIZATION, PIVOT_CONTOUR, R_N,
                      R_R, R_T, R_TAU, RADIUS, SIN_FALL_ANGLE, STAT_FAILURES, STAT_ITER_MAX, STAT_ITER_SUM,
