@@ -198,7 +198,7 @@ def table_rows(runs: dict, fig13=None, fig17=None) -> list[Row]:
                 f"onset of beta's > 4 Hz oscillation: {_since(onset)}", ONSET_CRITERION, _onset_verdict(onset, 2.0)))
         z5, zlow = _at(m3, "z_S", 5), float(window(m3, "z_S", 0, 0.5).min())
         add(Row("9", f"Model 3 ({name}): z_S drops slightly, then grows to r + e = 47.5 mm", "r + e",
-                f"min z_S on [0, 0.5] s {zlow * 1e3:.2f} mm (start {R_MINUS_E * 1e3:.1f}); "
+                f"min z_S on [0, 0.5] s {zlow * 1e3:.2f} mm (start {R_MINUS_E * 1e3:.1f} mm); "
                 f"z_S(5 s) = {z5 * 1e3:.2f} mm",
                 "drops, and z_S(5 s) > 47 mm", _judge(zlow < R_MINUS_E and z5 > 0.047)))
         fast, slow = _rate(m3, 0, 0.5), _rate(m3, 2, 5)
@@ -383,6 +383,24 @@ def scorecard(rows: list[Row]):
     ax.set_ylim(len(rows) - 0.5, -0.5)
     ax.set_title("Sect. 6 statements: " + summary(rows) + " (green / yellow / red / grey)", fontsize=9)
     return fig
+
+
+def update_readmes(root: Path | None = None) -> str:
+    """Recompute the table from data/ and write it into the marked blocks of studies/README.md and README.md
+    (what tests/test_paper_table.py checks). Returns the summary line."""
+    root = Path(root) if root else Path(__file__).resolve().parents[1]
+    data = root / "data"
+    with np.errstate(all="ignore"):
+        rows = table_rows(load_runs(data / "sect6"), td.load(data / "fig13_ode_inversion.nc"),
+                          td.load(data / "fig17_stroboscope.nc"))
+    blocks = {root / "studies" / "README.md": ("sect6-table", markdown(rows) + "\n\n" + summary(rows)),
+              root / "README.md": ("sect6-summary", summary(rows) + "\n\n" + markdown_short(rows))}
+    for path, (name, body) in blocks.items():
+        text = path.read_text()
+        begin, end = f"<!-- {name}:begin -->\n", f"\n<!-- {name}:end -->"
+        head, rest = text.split(begin, 1)
+        path.write_text(head + begin + body + end + rest.split(end, 1)[1])
+    return summary(rows)
 
 
 def _find(out: Path, name: str):
