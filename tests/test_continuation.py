@@ -389,3 +389,34 @@ def test_a_start_that_is_not_an_equilibrium_is_refused():
 def test_a_label_that_is_not_in_the_dataset_is_refused(branch):
     with pytest.raises(td.ParameterError, match="no special point 'HOPF7'"):
         sc.continue_curve(branch, "HOPF7")
+
+
+def test_no_branch_of_other_equilibria_emanates_from_the_zero_eigenvalue_point():
+    """At BP1 the kernel and the cokernel are two-dimensional (the family's structural zero and the crossing
+    eigenvalue); the two algebraic bifurcation equations share only the family's own tangent, so branch
+    switching finds nothing - as it must: every equilibrium has zero slip, hence S on the vertical through C1
+    and e_x^B vertical (stationary.py), i.e. only the two families exist."""
+    prob = sc.problem(["omega"], SETUP, bounds={"omega": (20.0, 40.0)})
+    branch = co.continue_branch(prob, np.append(st.stationary_state("inverted", [20.0])[:, 0], 20.0))
+    k = [sp.kind for sp in branch.special_points].index("branch_point")
+    sp = branch.special_points[k]
+    switch = co.branch_directions(prob, branch.points[sp.index], branch.points[sp.index - 1].tangent)
+    assert switch.cokernel.shape[1] == 2
+    c = switch.coefficients
+    assert np.all(np.abs(c[:, 0, 0]) < 1e-12 * np.abs(c).max())  # the family's tangent solves both equations
+    ratios = [c[m, 1, 1] / (2 * c[m, 0, 1]) for m in range(2)]  # each has one other root alpha/beta = -c22/(2 c12)
+    assert abs(ratios[0] - ratios[1]) > 0.5 * max(map(abs, ratios))  # and they differ: no common second root
+    assert switch.directions == [] and co.switch_branch(prob, branch, k) == []
+
+
+def test_stored_continuation_datasets_are_reproduced(branch):
+    """data/continuation/ (study continuation) holds what the package computes today."""
+    stored = td.load(DATA / "continuation" / "continuation_inverted.nc")
+    assert [str(v) for v in stored.special_label.values] == [str(v) for v in branch.special_label.values]
+    for name in ("special_a", "special_b", "special_k", "special_frequency"):
+        np.testing.assert_allclose(stored[name].values, branch[name].values, rtol=1e-7, atol=1e-12)
+    curve = td.load(DATA / "continuation" / "continuation_curve_HOPF1.nc")
+    assert curve.attrs["labels"] == "BT1 HH1"
+    i = int(_special(curve, "BT1")["index"])
+    assert float(curve.omega[i]) == pytest.approx(28.583595, abs=1e-6)
+    assert float(curve.eps[i]) == pytest.approx(0.33645952, abs=1e-8)

@@ -454,13 +454,15 @@ class Switch:
     directions: list  # unit tangents (scaled) of the emanating branches (the old one excluded)
 
 
-def branch_directions(problem: Problem, sp_point: Point, rank_tol: float = 1e-7) -> Switch:
+def branch_directions(problem: Problem, sp_point: Point, old_tangent: np.ndarray, rank_tol: float = 1e-7) -> Switch:
     """Tangents of the branches through a branch point from the algebraic bifurcation equations.
 
     At a simple branch point ker F_u is 2-dimensional (span of the old tangent phi_1 and phi_2).
     The tangent alpha phi_1 + beta phi_2 of any branch through the point solves
     sum_ij c_kij alpha_i alpha_j = 0 for every left null vector psi_k, c_kij = psi_k^T F_vv[phi_i, phi_j].
     The old branch is one root; the others are returned (none if the equations share only it).
+    ``old_tangent``: the tangent of a regular point next to the branch point (at the point itself
+    the null vector of F_u is an arbitrary vector of the 2-dimensional kernel).
     """
     u = sp_point.u
     scale = problem.scale
@@ -470,7 +472,8 @@ def branch_directions(problem: Problem, sp_point: Point, rank_tol: float = 1e-7)
     null = Vt[np.sum(sv > tol):].T if len(sv) == A.shape[1] else Vt[len(sv):].T
     if null.shape[1] < 2:  # numerically rank n - 1 at the located point: take the two smallest directions
         null = Vt[-2:].T
-    t_old = sp_point.tangent
+    t_old = null[:, -2:] @ (null[:, -2:].T @ old_tangent)  # the old branch's direction within the kernel
+    t_old /= np.linalg.norm(t_old)
     phi2 = null[:, 0] - (null[:, 0] @ t_old) * t_old
     if np.linalg.norm(phi2) < 1e-6:
         phi2 = null[:, 1] - (null[:, 1] @ t_old) * t_old
@@ -524,7 +527,7 @@ def switch_branch(problem: Problem, branch: Branch, special_index: int, options:
     if sp.kind != "branch_point":
         raise ParameterError(f"{sp.label} is a {sp.kind}, not a branch point; branch switching needs a BP")
     point = branch.points[sp.index]
-    switch = branch_directions(problem, point)
+    switch = branch_directions(problem, point, branch.points[sp.index - 1].tangent)
     step = min(abs(options.ds), 1e-3) if ds is None else ds
     new = []
     for d in switch.directions:
@@ -534,7 +537,8 @@ def switch_branch(problem: Problem, branch: Branch, special_index: int, options:
             if u is None:
                 continue
             offset = (u / problem.scale - v0)
-            if np.linalg.norm(offset - (offset @ point.tangent) * point.tangent) < 0.1 * step:
+            t_old = switch.kernel[:, 0]
+            if np.linalg.norm(offset - (offset @ t_old) * t_old) < 0.1 * step:
                 continue  # fell back onto the old branch
             new.append(continue_branch(problem, u, options, tangent=sign * d))
     return new

@@ -50,13 +50,14 @@ class EquilibriumProblem(continuation.Problem):
 
     def __init__(self, field: CompiledField, pars: np.ndarray, free: list[Parameter], *, state_names, state_scale,
                  pin_values: dict | None = None, bounds: dict | None = None, family: int | None = None,
-                 critical: str | None = None, nonsmooth=None, project=None):
+                 critical: str | None = None, nonsmooth=None, project=None, family_sign: float = 1.0):
         self.field = field
         self.n = field.n_state
         self.pars = np.array(pars, dtype=float)
         self.free = list(free)
         self.pin_values = dict(pin_values or {})  # pin index -> fixed value (pins not freed)
         self.family = family  # state index of the family direction (deflated), or None
+        self.family_sign = family_sign  # d x[family] / d s of the family's own coordinate s
         self.keep = [i for i in range(self.n) if i != family]
         if critical not in (None, "hopf", "zero"):
             raise ParameterError(f"critical = {critical!r}; give 'hopf', 'zero' or None")
@@ -238,7 +239,7 @@ class EquilibriumProblem(continuation.Problem):
         if self.family is None:
             return None
         phi0 = np.zeros(self.n)
-        phi0[self.family] = 1.0
+        phi0[self.family] = self.family_sign
         return phi0
 
     def _nonsmooth_term(self, x, pars):

@@ -107,7 +107,8 @@ def problem(free: list[str], setup: Setup | None = None, *, branch: str = "inver
     return EquilibriumProblem(reduced.field(), pars, params, state_names=reduced.STATE_NAMES,
                               state_scale=STATE_SCALE, pin_values={} if "omega" in free else {0: float(omega)},
                               bounds={free.index(k): v for k, v in bounds.items()}, family=reduced.OMEGA_X_INDEX,
-                              critical=critical, nonsmooth=reduced.nonsmooth_split, project=_onto_family(branch))
+                              critical=critical, nonsmooth=reduced.nonsmooth_split, project=_onto_family(branch),
+                              family_sign=st.branch_sign(branch))  # d x*/d Omega = sign e_omega_x
 
 
 def _check_in_bounds(name, value, bounds):
@@ -282,8 +283,8 @@ def _special_table(br, prob, setup) -> dict:
                            "flag_meanings": " ".join(k or "none" for k in CLASSES)}),
         "special_frequency": ("special_point", table["frequency"], {"units": "rad s-1", "long_name":
                               "frequency |Im s| of the critical pair (Hopf), 0 otherwise"}),
-        "special_a": ("special_point", table["a"], {"long_name": "normal-form coefficient a: d Re s / d s along the "
-                                                    "line of equilibria (s = Omega - Omega_c), 1/(s rad/s)"}),
+        "special_a": ("special_point", table["a"], {"long_name": "normal-form coefficient a = d Re s / d Omega along "
+                                                    "the line of equilibria (s = Omega - Omega_c)", "units": "rad-1"}),
         "special_b": ("special_point", table["b"], {"long_name": "normal-form coefficient b: drift of the spin rate, "
                                                     "d s / dt = b |z|^2 (line Hopf) or b z^2 (line transcritical)"}),
         "special_c": ("special_point", table["c"], {"long_name": "normal-form coefficient c: z' = a s z + c z^2 "
