@@ -420,3 +420,18 @@ def test_stored_continuation_datasets_are_reproduced(branch):
     i = int(_special(curve, "BT1")["index"])
     assert float(curve.omega[i]) == pytest.approx(28.583595, abs=1e-6)
     assert float(curve.eps[i]) == pytest.approx(0.33645952, abs=1e-8)
+
+
+def test_branch_through_a_point_of_a_dataset_equals_the_branch_from_the_stationary_solution(branch):
+    """From HOPF1 of the Omega branch in eps (Omega fixed there) = a branch in eps at that Omega."""
+    through = sc.continue_from_point(branch, "HOPF1", "eps", 0.1)
+    omega = float(branch.omega[int(_special(branch, "HOPF1")["index"])])
+    assert np.all(through.omega.values == omega) and float(through.eps[0]) == 0.25
+    direct = sc.continue_branch("inverted", "eps", 0.25, 0.1, setup=SETUP, omega=omega)
+    far = [sp for sp in ("HOPF2", "HOPF1") if sp in direct.attrs["labels"].split()]
+    assert far, direct.attrs["message"]
+    for label in direct.attrs["labels"].split():
+        eps_direct = float(direct.eps[int(_special(direct, label)["index"])])
+        if abs(eps_direct - 0.25) > 1e-6:  # (the start itself is a Hopf point)
+            eps_through = [float(through.eps[int(i)]) for i in through.special_index.values]
+            assert min(abs(e - eps_direct) for e in eps_through) < 1e-9

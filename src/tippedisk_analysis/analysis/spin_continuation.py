@@ -350,3 +350,28 @@ def continue_curve(ds: xr.Dataset, label: str, parameters=("omega", "eps"), *, b
     return branch_dataset(br, prob, setup, {"branch": branch, "sign": st.branch_sign(branch),
                                             "parameters": parameters, "source_label": label,
                                             "source_values": values, "omega": values["omega"]})
+
+
+def continue_from_point(ds: xr.Dataset, label: str, parameter: str, stop: float, *,
+                        options: continuation.Options | None = None) -> xr.Dataset:
+    """A branch in one ``parameter`` through point ``label`` of a continuation dataset (e.g. in mu from the
+    Hopf point of a branch in Omega), the other parameters held at that point's values."""
+    index, _kind = special_point(ds, label)
+    setup, branch, values, state = _source(ds, index)
+    _parameter(parameter, setup)
+    start = values[parameter]
+    if not math.isfinite(stop) or stop == start:
+        raise ParameterError(f"give a finite end value of {parameter} different from the start {start:g}")
+    low, high = sorted((start, float(stop)))
+    if parameter != "omega":
+        for value in (low, high):
+            _setup_at(setup, parameter, value)
+    fixed = {name: value for name, value in values.items() if name not in (parameter, "omega")}
+    setup = _setup_with(setup, fixed)
+    prob = problem([parameter], setup, branch=branch, omega=None if parameter == "omega" else values["omega"],
+                   bounds={parameter: (low, high)})
+    options = options or continuation.Options(ds_max=0.2 if parameter == "omega" else 0.05)
+    br = continuation.continue_branch(prob, np.append(state, start), options, direction=1 if stop > start else -1)
+    return branch_dataset(br, prob, setup, {"branch": branch, "sign": st.branch_sign(branch),
+                                            "parameters": [parameter], "start": start, "stop": float(stop),
+                                            "omega": values["omega"], "source_label": label})

@@ -18,10 +18,11 @@ def _arguments(p) -> None:
     one.add_argument("--from", dest="start", type=finite_float,
                      help="start value (omega: required; other parameters: default the Table 1-3 value)")
     one.add_argument("--to", dest="stop", type=finite_float, help="end value of the parameter")
-    two = p.add_argument_group("a curve in two parameters")
-    two.add_argument("--from-point", help="FILE:LABEL, a Hopf or zero-eigenvalue point of a continuation dataset, "
-                                          "e.g. c.nc:HOPF1")
-    two.add_argument("--parameters", help="two parameters, e.g. omega,eps (default omega,eps)")
+    two = p.add_argument_group("from a point of a continuation dataset")
+    two.add_argument("--from-point", help="FILE:LABEL, a special point of a continuation dataset, e.g. c.nc:HOPF1; "
+                                          "with --parameters A,B: the curve of that Hopf or zero-eigenvalue point "
+                                          "in two parameters; with --parameter P --to X: a branch in P through it")
+    two.add_argument("--parameters", help="two parameters of a curve, e.g. omega,eps")
     two.add_argument("--bounds", action="append", default=[], metavar="NAME=LOW:HIGH",
                      help="box the curve stays in (repeatable), e.g. --bounds eps=0.1:0.4")
     fixed = p.add_argument_group("fixed parameters (Tables 1-3, Sect. 6 defaults)")
@@ -67,10 +68,17 @@ def continue_(args) -> int:
         if not path or not label:
             raise ParameterError(f"--from-point {args.from_point!r} is not FILE:LABEL; give e.g. c.nc:HOPF1")
         source = results.load(path)
-        parameters = [s.strip() for s in (args.parameters or "omega,eps").split(",")]
-        options["ds_max"] = args.ds_max or 0.05
-        ds = spin_continuation.continue_curve(source, label, parameters, bounds=_bounds(args.bounds),
-                                              options=continuation.Options(ds=min(0.02, options["ds_max"]), **options))
+        if args.parameters is None and args.stop is not None:  # a branch in --parameter through the point
+            options["ds_max"] = args.ds_max or (0.2 if args.parameter == "omega" else 0.05)
+            ds = spin_continuation.continue_from_point(
+                source, label, args.parameter, args.stop,
+                options=continuation.Options(ds=min(0.02, options["ds_max"]), **options))
+        else:
+            parameters = [s.strip() for s in (args.parameters or "omega,eps").split(",")]
+            options["ds_max"] = args.ds_max or 0.05
+            ds = spin_continuation.continue_curve(source, label, parameters, bounds=_bounds(args.bounds),
+                                                  options=continuation.Options(ds=min(0.02, options["ds_max"]),
+                                                                               **options))
     else:
         if args.parameters or args.bounds:
             raise ParameterError("--parameters and --bounds belong to --from-point (curves); for a branch give "
