@@ -18,9 +18,11 @@ State machine of one run (counts are consecutive samples; settings in :class:`Re
    If most of them (``overlap``) already belong to one known attractor the run is assigned to it.
    Otherwise the problem describes the candidate (:meth:`Problem.describe`, by default
    :func:`describe`); a description makes it a new attractor whose cells join the table, ``None``
-   rejects it (a transient: e.g. the amplitude grows) and the run returns to *search* with its
-   visited cells forgotten. This rejection step is an addition to the published method: it keeps
-   slowly escaping transients (near an unstable equilibrium) out of the table.
+   rejects it (e.g. the amplitude grows) and the run returns to *search* with its visited cells
+   forgotten. A description marked ``transient`` (a slowly evolving state that a problem can
+   recognise, e.g. by a drifting energy) labels the run but keeps its cells out of the table, so it
+   stops no other run. Both are additions to the published method: they keep slowly escaping or
+   drifting transients from claiming cells that belong to an attractor's neighbourhood.
 3. a terminal event of the integrator ends the run with the problem's label for it (e.g. ``fell``);
    a non-finite state with ``failed``; the maximum horizon with ``undecided`` (the only way to get it).
 
@@ -223,6 +225,7 @@ class Description:
     period: float = -1.0  # -1: none
     extra: dict = dataclasses.field(default_factory=dict)
     radius: float = 0.0  # cells: largest distance (max-norm) of the attractor's cells from ``centroid``
+    transient: bool = False  # a slowly evolving state, not an attractor: runs are assigned, its cells not kept
 
 
 @dataclasses.dataclass
@@ -424,32 +427,29 @@ class DescribeContext:
         up = np.flatnonzero((z[:-1] < level) & (z[1:] >= level))
         if len(up) < 2:
             return None
-        # locate the crossings on a finer re-sampling between the bracketing samples (linear inverse
-        # interpolation on dense output, iterated: converges to round-off for a smooth crossing)
-        crossings = []
-        for i in up:
-            a, b = times[i], times[i + 1]
-            za, zb = z[i] - level, z[i + 1] - level
-            for _ in range(4):
-                tc = a - za * (b - a) / (zb - za)
-                xc = self.sample(state, pars, np.array([0.0, tc]))
-                if xc is None:
-                    return None
-                zc = problem.grid.unwrap(problem.observe(xc[:, 1:], np.asarray(pars)[:, None]))[index, 0] * \
-                    problem.grid.widths[index]
-                # keep the unwrapped branch of z near the bracket
-                per = problem.grid.periodic[index]
-                if per:
-                    P = problem.grid.upper[index] - problem.grid.lower[index]
-                    zc = zc - P * np.round((zc - z[i]) / P)
-                zc -= level
-                if zc < 0:
-                    a, za = tc, zc
-                else:
-                    b, zb = tc, zc
-                if abs(zc) < 1e-13 * (1 + abs(level)):
-                    break
-            crossings.append(tc)
+        # refine all crossings together (regula falsi on the dense re-integration: one propagate_grid per
+        # iteration, converging to round-off for a smooth crossing)
+        a, b = times[up].copy(), times[up + 1].copy()
+        za, zb = z[up] - level, z[up + 1] - level
+        ref = z[up]
+        per = problem.grid.periodic[index]
+        P = problem.grid.upper[index] - problem.grid.lower[index]
+        tc = a.copy()
+        for _ in range(6):
+            tc = np.where(zb != za, a - za * (b - a) / np.where(zb != za, zb - za, 1.0), a)
+            xc = self.sample(state, pars, np.concatenate([[0.0], tc]))
+            if xc is None:
+                return None
+            zc = problem.observe(xc[:, 1:], np.repeat(np.asarray(pars)[:, None], len(tc), axis=1))[index]
+            if per:  # the unwrapped branch of z near the bracket
+                zc = zc - P * np.round((zc - ref) / P)
+            zc = zc - level
+            left = zc < 0
+            a, za = np.where(left, tc, a), np.where(left, zc, za)
+            b, zb = np.where(left, b, tc), np.where(left, zb, zc)
+            if np.all(np.abs(zc) < 1e-13 * (1 + abs(level))):
+                break
+        crossings = tc
         period = float(np.mean(np.diff(crossings)))
         amplitude = 0.5 * (_extremum(z, np.argmax(z)) - _extremum(z, np.argmin(z)))
         return period, amplitude, ys, times
@@ -500,6 +500,19 @@ def growing(settings: RecurrenceSettings, a1: float, a2: float) -> bool:
     return a2 > settings.growth_ratio * a1 and a2 > settings.equilibrium_spread
 
 
+def converging(settings: RecurrenceSettings, a1: float, a2: float) -> bool:
+    return a2 <= settings.equilibrium_spread or a2 <= settings.decay_ratio * a1
+
+
+def equilibrium_description(problem: Problem, cand: Candidate, refined: dict) -> Description:
+    """An equilibrium from ``refine_equilibrium``'s result {"state": ..., **extra}."""
+    refined = dict(refined)
+    state = refined.pop("state")
+    y = problem.observe(state[:, None], np.asarray(cand.pars)[:, None])[:, 0]
+    return Description("equilibrium", problem.represent(state), y, np.zeros(len(problem.grid.names)), 0.0, -1.0,
+                       refined)
+
+
 def describe(problem: Problem, cand: Candidate, core: DescribeContext) -> Description | None:
     """Generic description of a candidate (module docstring: equilibrium / periodic / irregular, or None)."""
     s, grid = core.settings, problem.grid
@@ -511,13 +524,9 @@ def describe(problem: Problem, cand: Candidate, core: DescribeContext) -> Descri
     spread = 0.5 * np.ptp(yu[:, h:], axis=1) * grid.widths
     if growing(s, a1, a2):
         return None
-    if a2 <= s.equilibrium_spread or a2 <= s.decay_ratio * a1:
+    if converging(s, a1, a2):
         refined = problem.refine_equilibrium(cand.states[:, -1], cand.pars, core)
-        if refined is None:
-            return None
-        state = refined.pop("state")
-        y = problem.observe(state[:, None], np.asarray(cand.pars)[:, None])[:, 0]
-        return Description("equilibrium", problem.represent(state), y, np.zeros(len(grid.names)), 0.0, -1.0, refined)
+        return None if refined is None else equilibrium_description(problem, cand, refined)
     # a return: going back from the last sample, past an excursion (> 2 return_distance away), the
     # latest earlier sample within return_distance of it; the lag is (a multiple of) the period
     d = np.max(np.abs(grid.difference(cand.observed, cand.observed[:, -1:])), axis=0)
@@ -648,15 +657,17 @@ def map_points(problem: Problem, settings: RecurrenceSettings, x0, pars, groups=
             if f.group == g and problem.same_attractor(f.description, desc):
                 f.description = combine(problem, [f.description, desc])
                 f.cells |= cellset
-                for k in cellset:
-                    table.setdefault(k, a)
+                if not desc.transient:
+                    for k in cellset:
+                        table.setdefault(k, a)
                 f.description.radius = _radius(problem.grid, f.cells, f.description.centroid)
                 return a
         desc.radius = max(desc.radius, _radius(problem.grid, cellset, desc.centroid))
         idx = len(found)
         found.append(Found(g, desc, cellset, float(cand.times[-1])))
-        for k in cellset:
-            table.setdefault(k, idx)
+        if not desc.transient:  # transients stop no other run: their cells may hold an attractor's basin
+            for k in cellset:
+                table.setdefault(k, idx)
         return idx
 
     def step(lane: _Lane, t: float, x, y, key: int):
@@ -894,7 +905,9 @@ def chunk_result(problem: Problem, res: MapResult, start: int) -> dict[str, np.n
         descs.extend(merged)
     labels = res.labels
     att = labels >= 0
-    key = np.where(att, start * 1_000_000 + np.where(att, index[np.maximum(labels, 0)], 0), labels)
+    local = index[labels[att]] if len(index) else np.zeros(0, dtype=np.int64)
+    key = labels.copy()
+    key[att] = start * 1_000_000 + local
     point_descs = [descs[index[lab]] if lab >= 0 else None for lab in labels]
     dist = np.array([problem.point_distance(d, res.final_states[:, p], res.final_observed[:, p]) if d is not None
                      else math.nan for p, d in enumerate(point_descs)])

@@ -26,15 +26,23 @@ candidates of one parameter point are one (pseudo-)attractor: rim rolling drifts
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
+import os
 
 import numpy as np
+import xarray as xr
 
-from ..defaults import FALL_ANGLE, MAP_TOL, SLIP_SMOOTHING
+from ..defaults import BATCH_SIZE, FALL_ANGLE, MAP_TOL, MEMORY_FRACTION, SLIP_SMOOTHING
+from ..errors import ParameterError
 from ..models import ode
+from ..parameters import Disk, Friction, InitialState, Setup, to_dict
+from ..ranges import parse_range
+from ..results import describe as describe_units
+from ..results import make_attrs
 from . import attractors as at
-from . import stability
+from . import stability, sweeps
 from . import stationary as st
 from .reduced import STATE_NAMES as REDUCED_NAMES
 from .reduced import reduced_from_full
@@ -49,9 +57,10 @@ SEGMENT_SCAN = (60.0, 0.5)  # rad/s: half-width and step of the scan for the sta
 STATIONARY_ATOL = 1e-6  # an equilibrium must equal the closed-form stationary solution to this (max-norm)
 
 DEFAULT_GRID = {
-    # name: (lower, upper, cells, periodic); cell widths 0.1 rad, 0.26 rad, 2 rad/s
-    "beta": (0.0, math.pi, 32, False),
-    "gamma": (-math.pi, math.pi, 24, True),
+    # name: (lower, upper, cells, periodic); cell widths pi/32 rad, pi/12 rad, 4 rad/s, shifted by half a cell
+    # so that the spins (beta = pi/2, gamma = -+pi/2) lie at cell centres, not on cell boundaries
+    "beta": (-math.pi / 64, math.pi + math.pi / 64, 33, False),
+    "gamma": (-math.pi - math.pi / 24, math.pi - math.pi / 24, 24, True),
     "alpha_dot": (-300.0, 300.0, 150, False),
 }
 DEFAULT_RECURRENCE = {"dt": 0.05, "consecutive_recurrences": 40, "attractor_locate_steps": 100,
@@ -207,24 +216,26 @@ class TippediskProblem(at.Problem):
             amplitude = 0.5 * float(np.ptp(o["beta"]))  # tilt oscillation
             return at.Description("rolling", self.represent(cand.states[:, -1]), centroid, spread, amplitude,
                                   period, extra)
-        desc = at.describe(self, cand, core)
-        if desc is None:
-            if at.growing(core.settings, *at.spreads(self.grid, cand.observed)):
-                return None
-            # near a spin that Newton + stability do not accept (an unstable member of the family,
-            # slowly approached or left): a dissipating wobble, a transient (checked by the drift below)
-            grid = self.grid
-            half = len(t) // 2
-            desc = at.Description("irregular", self.represent(cand.states[:, -1]), at._circular_mean(grid, cand.observed),
-                                  0.5 * np.ptp(grid.unwrap(cand.observed[:, half:]), axis=1) * grid.widths,
-                                  0.5 * float(np.ptp(g[half:])), -1.0)
-        if desc.kind == "equilibrium":
+        settings, grid = core.settings, self.grid
+        a1, a2 = at.spreads(grid, cand.observed)
+        if at.growing(settings, a1, a2):
+            return None
+        half = len(t) // 2
+        if at.converging(settings, a1, a2):
+            refined = self.refine_equilibrium(cand.states[:, -1], cand.pars, core)
+            if refined is not None:
+                return at.equilibrium_description(self, cand, refined)
+        elif abs(drift) <= DRIFT_TOL:  # no measurable dissipation: a periodic orbit? (LaSalle says none exist)
+            desc = at.describe(self, cand, core)
+            if desc is not None and desc.kind != "equilibrium":
+                desc.extra = extra
             return desc
-        desc.extra = extra
-        if abs(drift) > DRIFT_TOL:  # dissipates: no periodic orbit, a slowly evolving wobble about a spin
-            desc.kind = "wobbling"
-            desc.extra["branch"] = float(np.sign(np.mean(np.sin(_wrap(g)))))
-        return desc
+        # a dissipating oscillation about the spin family, or near a spin that Newton + stability do not
+        # accept (an unstable member, slowly approached or left): a transient
+        extra["branch"] = float(np.sign(np.mean(np.sin(_wrap(g)))))
+        return at.Description("wobbling", self.represent(cand.states[:, -1]), at._circular_mean(grid, cand.observed),
+                              0.5 * np.ptp(grid.unwrap(cand.observed[:, half:]), axis=1) * grid.widths,
+                              0.5 * float(np.ptp(g[half:])), -1.0, extra, transient=True)
 
     def refine_equilibrium(self, state, pars, core):
         """Newton on the reduced system (alpha_dot pinned), then the closed-form check and the stability."""
@@ -302,10 +313,6 @@ class TippediskProblem(at.Problem):
         pars = ode.parameter_vector()  # the projection of a state does not depend on the parameters
         y_member = self.observe(full_of(member, float(pars[ode.PARAMETER_NAMES.index("r")]))[:, None], pars)
         return float(np.max(np.abs(self.grid.difference(observed, y_member[:, 0]))))
-
-
-def parameter_vector(setup, fall_angle: float = FALL_ANGLE, slip_smoothing: float = SLIP_SMOOTHING):
-    return ode.parameter_vector(setup, fall_angle, slip_smoothing)
 
 
 # ------------------------------------------------------------------ runs of many points (sweeps)
@@ -466,6 +473,8 @@ def table_coords() -> dict:
 
 def warm_up(tol: float, batch_size: int) -> None:
     """Compile (or load from heyoka's cache) what the threads share, once, before they start."""
+    import scipy.optimize  # noqa: F401 (stable_segment; imported once, not inside the threads)
+
     integrator(float(tol), int(batch_size))
     observables()
     from .reduced import evaluate, jacobian
@@ -486,3 +495,382 @@ def summary(outcome, table: list, n: int, horizon: float) -> str:
         kinds[d.kind] = kinds.get(d.kind, 0) + int(np.sum(outcome == i))
     parts += [f"{c} {k}" for k, c in kinds.items()]
     return ", ".join(parts) + f"; {len(table)} attractors"
+
+
+
+# --------------------------------------------------------------- basins over initial conditions
+INITIAL = {
+    # name: (units, long_name, InitialState field, Table 3 value)
+    "omega": ("rad s-1", "initial spin Omega = alpha_dot(0)", "alpha_dot", 40.0),
+    "beta0": ("rad", "initial inclination beta(0) (pi/2: upright)", "beta", 0.5 * math.pi),
+    "dgamma0": ("rad", "gamma(0) + pi/2 (0: S straight below G)", "gamma", 0.1),
+    "beta_dot0": ("rad s-1", "initial rate beta_dot(0)", "beta_dot", 0.0),
+    "gamma_dot0": ("rad s-1", "initial rate gamma_dot(0) (Table 3: -alpha_dot cos beta, no spin about the "
+                              "disk normal)", "gamma_dot", None),
+}
+PARAMETERS = {"eps": ("m s-1", "smoothing velocity eps of (2.29)"), "mu": ("1", "friction coefficient mu"),
+              "e": ("m", "eccentricity e")}
+CHUNK_SIZE = 256  # runs per stored chunk of basin sweeps (~1-2 s of work)
+SPECIAL_ORDER = ("undecided", "left_grid", "failed", "fell", "lift_off")
+
+
+def initial_state(setup: Setup, values: dict) -> np.ndarray:
+    """Model state (13,) of initial values {INITIAL name: value} (the rest from Table 3)."""
+    kw = {}
+    for name, v in values.items():
+        field = INITIAL[name][2]
+        kw[field] = -0.5 * math.pi + float(v) if name == "dgamma0" else float(v)
+    return ode.initial_state_vector(MODEL, setup, InitialState(**kw))
+
+
+def _setup(base: dict, params: dict) -> Setup:
+    s = Setup(Disk(**base["disk"]), Friction(**base["friction"]), base["gravity"])
+    fric = {k: float(v) for k, v in params.items() if k in ("eps", "mu")}
+    disk = {k: float(v) for k, v in params.items() if k == "e"}
+    return dataclasses.replace(s, friction=dataclasses.replace(s.friction, **fric),
+                               disk=dataclasses.replace(s.disk, **disk))
+
+
+def memory_estimate(n_points: int) -> int:
+    """Bytes a sweep of n_points keeps: the per-point chunk columns, merged, plus the dataset."""
+    return int(n_points * (len(chunk_variables()) + len(POINT_VARIABLES) + 4) * 8 * 2)
+
+
+def check_memory(n_points: int) -> int:
+    need = memory_estimate(n_points)
+    try:
+        avail = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_AVPHYS_PAGES")
+    except (ValueError, OSError, AttributeError):  # pragma: no cover (non-POSIX)
+        return need
+    if need > MEMORY_FRACTION * avail:
+        raise ParameterError(f"{n_points} runs need about {need / 2**20:.0f} MB, more than {MEMORY_FRACTION:.0%} of the "
+                             f"{avail / 2**20:.0f} MB available; use fewer grid points or samples")
+    return need
+
+
+@dataclasses.dataclass(frozen=True)
+class BasinConfig:
+    """Basins over (one or) two initial values at fixed parameters (stored in the dataset, checked on resume)."""
+
+    axes: dict  # INITIAL name -> [start, stop, n]
+    initial: dict = dataclasses.field(default_factory=dict)  # other INITIAL names -> value (default Table 3)
+    parameters: dict = dataclasses.field(default_factory=dict)  # eps, mu, e -> value (default Tables 1-2, Sect. 6)
+    t_end: float = 60.0  # maximum horizon
+    tol: float = MAP_TOL
+    fall_angle: float = FALL_ANGLE
+    slip_smoothing: float = SLIP_SMOOTHING
+    chunk_size: int = CHUNK_SIZE
+    batch_size: int = BATCH_SIZE
+    recurrence: dict | None = None
+    setup: dict = dataclasses.field(default_factory=lambda: to_dict(Setup()))
+
+    def __post_init__(self):
+        if not self.axes or len(self.axes) > 2:
+            raise ParameterError("basins need one or two initial-value ranges, e.g. --dgamma0 -3.1:3.1:256 "
+                                 "--beta0 1.2:1.9:256")
+        unknown = (set(self.axes) | set(self.initial)) - set(INITIAL)
+        if unknown:
+            raise ParameterError(f"unknown initial value(s) {sorted(unknown)}; give {', '.join(INITIAL)}")
+        if set(self.axes) & set(self.initial):
+            raise ParameterError(f"{sorted(set(self.axes) & set(self.initial))} given as a range and as a value; "
+                                 "give one")
+        if set(self.parameters) - set(PARAMETERS):
+            raise ParameterError(f"unknown parameter(s) {sorted(set(self.parameters) - set(PARAMETERS))}; "
+                                 f"give {', '.join(PARAMETERS)}")
+        axes = {k: [float(v[0]), float(v[1]), int(v[2])] for k, v in self.axes.items()}
+        for k, v in axes.items():
+            parse_range(f"{v[0]!r}:{v[1]!r}:{v[2]}", k)
+        object.__setattr__(self, "axes", axes)
+        object.__setattr__(self, "initial", {k: float(v) for k, v in self.initial.items()})
+        object.__setattr__(self, "parameters", {k: float(v) for k, v in self.parameters.items()})
+        _validate_common(self)
+        setup = self.physical_setup()
+        for name, (a, b, _n) in axes.items():  # the ends of every range through the dataclasses
+            for v in (a, b):
+                initial_state(setup, {**self.initial, name: v})
+
+    def axis_values(self) -> dict[str, np.ndarray]:
+        return {k: np.linspace(*v) for k, v in self.axes.items()}
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(v[2] for v in self.axes.values())
+
+    @property
+    def n_points(self) -> int:
+        return int(np.prod(self.shape))
+
+    def physical_setup(self) -> Setup:
+        return _setup(self.setup, self.parameters)
+
+    def to_dict(self) -> dict:
+        return {"model": MODEL.name, **dataclasses.asdict(self)}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> BasinConfig:
+        return cls(**{k: v for k, v in d.items() if k != "model"})
+
+
+def _validate_common(cfg) -> None:
+    if not (math.isfinite(cfg.t_end) and cfg.t_end > 0):
+        raise ParameterError(f"t_end = {cfg.t_end!r} s must be positive; give the maximum horizon, e.g. 60")
+    if not (math.isfinite(cfg.tol) and 0 < cfg.tol < 1):
+        raise ParameterError(f"tol = {cfg.tol!r} must lie in (0, 1); give e.g. 1e-10")
+    if not (0 < cfg.fall_angle < math.pi / 2):
+        raise ParameterError("fall_angle must lie in (0, pi/2) rad; give e.g. 0.1")
+    if int(cfg.chunk_size) != cfg.chunk_size or cfg.chunk_size < 1:
+        raise ParameterError(f"chunk_size = {cfg.chunk_size!r} must be a positive integer")
+    if cfg.batch_size not in (1, 2, 4, 8, 16):
+        raise ParameterError(f"batch_size = {cfg.batch_size!r}; give 1, 2, 4, 8 or 16 SIMD lanes")
+    recurrence_settings(cfg.t_end, cfg.recurrence)
+    _setup(cfg.setup, cfg.parameters)  # ParameterError naming the fix
+
+
+def _basin_points(cfg: BasinConfig, start: int, stop: int):
+    axes = cfg.axis_values()
+    idx = np.unravel_index(np.arange(start, stop), cfg.shape)
+    setup = cfg.physical_setup()
+    x0 = np.empty((len(MODEL.state_names), stop - start))
+    for j in range(stop - start):
+        values = {**cfg.initial, **{name: axes[name][i[j]] for name, i in zip(axes, idx)}}
+        x0[:, j] = initial_state(setup, values)
+    return x0, ode.parameter_vector(setup, cfg.fall_angle, cfg.slip_smoothing)
+
+
+def basin_chunk(config: BasinConfig | dict, start: int, stop: int) -> dict:
+    """Points [start, stop) of a basin map (module-level: a dask worker runs it from the config alone)."""
+    cfg = BasinConfig.from_dict(config) if isinstance(config, dict) else config
+    x0, pars = _basin_points(cfg, start, stop)
+    return run_points(x0, pars, np.zeros(stop - start, dtype=np.int64), tol=cfg.tol, batch_size=cfg.batch_size,
+                      horizon=cfg.t_end, recurrence=cfg.recurrence, key_base=start)
+
+
+def _point_data(dims, shape, results, outcome, table, reorder=None):
+    """outcome, assignment_time and POINT_VARIABLES as data variables over ``dims``."""
+
+    def values(v, dtype=None):
+        v = np.asarray(v, dtype=dtype)
+        if reorder is not None:
+            out = np.empty_like(v)
+            out[reorder] = v
+            v = out
+        return v.reshape(shape)
+
+    flag_values, flag_meanings = outcome_flags(table)
+    data = {"outcome": (dims, values(outcome), {
+        "units": "1", "long_name": "attractor id (>= 0, see dimension attractor) or negative label",
+        "flag_values": flag_values, "flag_meanings": flag_meanings,
+        "classification": "recurrences in a cell grid (analysis/attractors.py, analysis/basins.py)"})}
+    data["assignment_time"] = (dims, values(results["t_assign"], float), {
+        "units": "s", "long_name": "time at which the run was assigned to an attractor or labelled"})
+    for name, (dtype, units, long_name) in POINT_VARIABLES.items():
+        attrs = {"units": units, "long_name": long_name}
+        if name.endswith("_time"):
+            attrs["fill_value_meaning"] = "-1 s where the event did not happen"
+        elif name == "valid":
+            attrs.update(flag_values=np.array([0, 1], dtype=np.int8), flag_meanings="lift_off valid")
+        data[name] = (dims, values(results[name], dtype), attrs)
+    return data
+
+
+def _fractions(outcome: np.ndarray, n_attractors: int) -> tuple[np.ndarray, np.ndarray]:
+    """(fraction per attractor, fraction per SPECIAL_ORDER label) of a set of runs."""
+    outcome = np.asarray(outcome).ravel()
+    n = max(outcome.size, 1)
+    lab = labels()
+    return (np.array([np.sum(outcome == i) / n for i in range(n_attractors)]),
+            np.array([np.sum(outcome == lab[name]) / n for name in SPECIAL_ORDER]))
+
+
+def assemble_basins(cfg: BasinConfig, results: dict) -> xr.Dataset:
+    outcome, table_vars, table = attractor_table(results, np.zeros(cfg.n_points, dtype=np.int64))
+    axes = cfg.axis_values()
+    dims = tuple(axes)
+    data = _point_data(dims, cfg.shape, results, outcome, table)
+    data.update(table_vars)
+    frac, special = _fractions(outcome, len(table))
+    data["basin_fraction"] = (("attractor",), frac, {"units": "1", "long_name": "share of the runs in the basin"})
+    data["label_fraction"] = (("label",), special, {"units": "1", "long_name": "share of the runs with this label"})
+    coords = {name: (name, values, {"units": INITIAL[name][0], "long_name": INITIAL[name][1]})
+              for name, values in axes.items()}
+    coords["attractor"] = ("attractor", np.arange(len(table)), {"long_name": "attractor id"})
+    coords["label"] = ("label", list(SPECIAL_ORDER), {"long_name": "labels of runs without an attractor"})
+    coords.update(table_coords())
+    message = summary(outcome, table, cfg.n_points, cfg.t_end)
+    status = "partial" if np.any(outcome == labels()["failed"]) else "completed"
+    setup = cfg.physical_setup()
+    ds = xr.Dataset(data, coords=coords, attrs=make_attrs(
+        "basins", cfg.to_dict(), status, message, model=MODEL.name, paper_model=MODEL.paper_name,
+        swept=" ".join(dims), t_end=cfg.t_end, eps=setup.friction.eps, mu=setup.friction.mu, e=setup.disk.e,
+        fixed_initial=" ".join(f"{k}={v:g}" for k, v in cfg.initial.items())))
+    return describe_units(ds)
+
+
+def basin_sweep(cfg: BasinConfig) -> sweeps.Sweep:
+    return sweeps.Sweep("basins", cfg.to_dict(), cfg.n_points, int(cfg.chunk_size), chunk_variables(), basin_chunk,
+                        functools.partial(assemble_basins, cfg),
+                        functools.partial(warm_up, float(cfg.tol), int(cfg.batch_size)))
+
+
+def basins(axes: dict, *, output=None, scheduler=None, threads: int | None = None, progress: bool = True,
+           **options) -> xr.Dataset:
+    """Basins of attraction over ``axes`` ({INITIAL name: (start, stop, n)}, one or two) at fixed parameters.
+
+    Options: the fields of :class:`BasinConfig` (initial, parameters, t_end, tol, ...). ``output``: netCDF
+    path, resumable chunks in ``<output>.chunks/``; ``scheduler``: dask address or ``local:N``.
+    """
+    cfg = BasinConfig(axes=dict(axes), **options)
+    check_memory(cfg.n_points)
+    return sweeps.run_sweep(basin_sweep(cfg), output=output, scheduler=scheduler, threads=threads, progress=progress)
+
+
+# ------------------------------------------------ basin fractions continued over a parameter
+@dataclasses.dataclass(frozen=True)
+class FractionsConfig:
+    """Basin fractions of ``samples`` random initial conditions (uniform in ``ranges``, fixed ``seed``) at each
+    value of ``parameter`` (an initial value such as omega, or a parameter eps, mu, e)."""
+
+    parameter: str
+    values: list  # [start, stop, n]
+    ranges: dict  # INITIAL name -> [low, high] sampled uniformly
+    samples: int = 200
+    seed: int = 0
+    initial: dict = dataclasses.field(default_factory=dict)
+    parameters: dict = dataclasses.field(default_factory=dict)
+    t_end: float = 60.0
+    tol: float = MAP_TOL
+    fall_angle: float = FALL_ANGLE
+    slip_smoothing: float = SLIP_SMOOTHING
+    chunk_size: int = CHUNK_SIZE
+    batch_size: int = BATCH_SIZE
+    recurrence: dict | None = None
+    setup: dict = dataclasses.field(default_factory=lambda: to_dict(Setup()))
+
+    def __post_init__(self):
+        if self.parameter not in INITIAL and self.parameter not in PARAMETERS:
+            raise ParameterError(f"cannot continue over {self.parameter!r}; give one of "
+                                 f"{', '.join([*INITIAL, *PARAMETERS])}")
+        v = parse_range(f"{self.values[0]!r}:{self.values[1]!r}:{int(self.values[2])}", self.parameter)
+        object.__setattr__(self, "values", [v[0], v[1], v[2]])
+        ranges = {k: [float(a), float(b)] for k, (a, b) in self.ranges.items()}
+        if set(ranges) - set(INITIAL) or self.parameter in ranges:
+            raise ParameterError(f"sampled ranges must be initial values other than the continued one "
+                                 f"({', '.join(n for n in INITIAL if n != self.parameter)})")
+        for k, (a, b) in ranges.items():
+            if not (math.isfinite(a) and math.isfinite(b) and a <= b):
+                raise ParameterError(f"range of {k} must be finite LOW <= HIGH")
+        object.__setattr__(self, "ranges", ranges)
+        if int(self.samples) != self.samples or self.samples < 1:
+            raise ParameterError(f"samples = {self.samples!r} must be a positive integer")
+        if (set(self.initial) - set(INITIAL)) or (set(self.parameters) - set(PARAMETERS)):
+            raise ParameterError(f"initial values are {', '.join(INITIAL)}; parameters are {', '.join(PARAMETERS)}")
+        object.__setattr__(self, "initial", {k: float(x) for k, x in self.initial.items()})
+        object.__setattr__(self, "parameters", {k: float(x) for k, x in self.parameters.items()})
+        _validate_common(self)
+        for value in (v[0], v[1]):
+            setup, init = self._at(value)
+            for corner in (0, 1):
+                initial_state(setup, {**init, **{k: r[corner] for k, r in ranges.items()}})
+
+    def parameter_values(self) -> np.ndarray:
+        return np.linspace(*self.values)
+
+    @property
+    def n_points(self) -> int:
+        return int(self.values[2]) * int(self.samples)
+
+    @property
+    def shared_attractors(self) -> bool:
+        """Continuing over an initial value: one system, so all runs share the attractors found."""
+        return self.parameter in INITIAL
+
+    def sample(self) -> dict[str, np.ndarray]:
+        """The sampled initial values (same for every parameter value)."""
+        rng = np.random.default_rng(int(self.seed))
+        return {k: rng.uniform(a, b, int(self.samples)) for k, (a, b) in self.ranges.items()}
+
+    def _at(self, value) -> tuple[Setup, dict]:
+        if self.parameter in PARAMETERS:
+            return _setup(self.setup, {**self.parameters, self.parameter: value}), dict(self.initial)
+        return _setup(self.setup, self.parameters), {**self.initial, self.parameter: value}
+
+    def to_dict(self) -> dict:
+        return {"model": MODEL.name, **dataclasses.asdict(self)}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> FractionsConfig:
+        return cls(**{k: v for k, v in d.items() if k != "model"})
+
+
+def fractions_chunk(config: FractionsConfig | dict, start: int, stop: int) -> dict:
+    cfg = FractionsConfig.from_dict(config) if isinstance(config, dict) else config
+    values, samples, S = cfg.parameter_values(), cfg.sample(), int(cfg.samples)
+    x0 = np.empty((len(MODEL.state_names), stop - start))
+    pars = np.empty((len(ode.PARAMETER_NAMES), stop - start))
+    cache = {}
+    for j, p in enumerate(range(start, stop)):
+        k, i = divmod(p, S)
+        if k not in cache:
+            cache[k] = cfg._at(values[k])
+        setup, init = cache[k]
+        x0[:, j] = initial_state(setup, {**init, **{name: v[i] for name, v in samples.items()}})
+        pars[:, j] = ode.parameter_vector(setup, cfg.fall_angle, cfg.slip_smoothing)
+    groups = np.zeros(stop - start, dtype=np.int64) if cfg.shared_attractors else np.arange(start, stop) // S
+    return run_points(x0, pars, groups, tol=cfg.tol, batch_size=cfg.batch_size, horizon=cfg.t_end,
+                      recurrence=cfg.recurrence, key_base=start)
+
+
+def assemble_fractions(cfg: FractionsConfig, results: dict) -> xr.Dataset:
+    S, values = int(cfg.samples), cfg.parameter_values()
+    groups = np.zeros(cfg.n_points, dtype=np.int64) if cfg.shared_attractors else np.arange(cfg.n_points) // S
+    outcome, table_vars, table = attractor_table(results, groups)
+    n_att = len(table)
+    par = cfg.parameter
+    frac = np.zeros((len(values), n_att))
+    special = np.zeros((len(values), len(SPECIAL_ORDER)))
+    oc = outcome.reshape(len(values), S)
+    for k in range(len(values)):
+        frac[k], special[k] = _fractions(oc[k], n_att)
+    inverted = np.array([d.kind == "equilibrium" and d.extra.get("branch", 0) > 0 for d in table], dtype=bool)
+    data = _point_data((par, "sample"), (len(values), S), results, outcome, table)
+    data.update(table_vars)
+    data["basin_fraction"] = ((par, "attractor"), frac, {"units": "1", "long_name": "share of the sampled runs "
+                                                                                      "in the basin"})
+    data["label_fraction"] = ((par, "label"), special, {"units": "1", "long_name": "share of the runs with this "
+                                                                                  "label"})
+    data["inverted_fraction"] = ((par,), frac[:, inverted].sum(axis=1) if n_att else np.zeros(len(values)), {
+        "units": "1", "long_name": "share of the runs that end in a stable inverted spin (equilibrium attractors "
+                                   "of the inverted branch)"})
+    samples = cfg.sample()
+    for name, v in samples.items():
+        data[f"sample_{name}"] = (("sample",), v, {"units": INITIAL[name][0], "long_name": "sampled " + INITIAL[name][1]})
+    units, long_name = (INITIAL[par][:2] if par in INITIAL else PARAMETERS[par])
+    coords = {par: (par, values, {"units": units, "long_name": long_name}),
+              "sample": ("sample", np.arange(S), {"long_name": "sampled initial condition"}),
+              "attractor": ("attractor", np.arange(n_att), {"long_name": "attractor id (matched across " + par + ")"}),
+              "label": ("label", list(SPECIAL_ORDER), {"long_name": "labels of runs without an attractor"})}
+    coords.update(table_coords())
+    message = summary(outcome, table, cfg.n_points, cfg.t_end) + (
+        f"; inverted share {float(data['inverted_fraction'][1].min()):.3g}-{float(data['inverted_fraction'][1].max()):.3g}")
+    status = "partial" if np.any(outcome == labels()["failed"]) else "completed"
+    ds = xr.Dataset(data, coords=coords, attrs=make_attrs(
+        "basin_fractions", cfg.to_dict(), status, message, model=MODEL.name, paper_model=MODEL.paper_name,
+        parameter=par, t_end=cfg.t_end, shared_attractors=cfg.shared_attractors))
+    return describe_units(ds)
+
+
+def fractions_sweep(cfg: FractionsConfig) -> sweeps.Sweep:
+    return sweeps.Sweep("basin fractions", cfg.to_dict(), cfg.n_points, int(cfg.chunk_size), chunk_variables(),
+                        fractions_chunk, functools.partial(assemble_fractions, cfg),
+                        functools.partial(warm_up, float(cfg.tol), int(cfg.batch_size)))
+
+
+def basin_fractions(parameter: str, values, ranges: dict, *, output=None, scheduler=None, threads: int | None = None,
+                    progress: bool = True, **options) -> xr.Dataset:
+    """Basin fractions continued over ``parameter`` (values (start, stop, n)); ``ranges`` {INITIAL name:
+    (low, high)} are sampled (``samples`` per value, ``seed``). Attractors are matched across the values
+    (global continuation); continuing over an initial value (omega) they are shared outright."""
+    cfg = FractionsConfig(parameter=parameter, values=list(values), ranges=dict(ranges), **options)
+    check_memory(cfg.n_points)
+    return sweeps.run_sweep(fractions_sweep(cfg), output=output, scheduler=scheduler, threads=threads,
+                            progress=progress)

@@ -1,4 +1,7 @@
-"""``tippedisk outcome-map``: classify runs over a grid of (Omega, eps[, mu, e, dgamma0]); resumable."""
+"""``tippedisk outcome-map``: classify runs over a grid of (Omega, eps[, mu, e, dgamma0]); resumable.
+
+By default each run is assigned to the attractor it reaches (``--classify attractors``, analysis/basins.py);
+``--classify rules`` keeps the rule-based classification of fixed-length runs (analysis/outcome_map.py)."""
 
 from __future__ import annotations
 
@@ -15,9 +18,15 @@ def _arguments(p) -> None:
     p.add_argument("--e", type=range_type("e"), help="START:STOP:N eccentricity [m] (default 2.5e-3; A, B, C "
                                                     "about G held fixed)")
     p.add_argument("--dgamma0", type=range_type("dgamma0"), help="START:STOP:N gamma(0) + pi/2 [rad] (default 0.1)")
-    p.add_argument("--t-end", type=finite_float, default=5.0, help="length of each run [s] (default 5)")
-    p.add_argument("--window", type=finite_float, help="classification window at the end [s] "
+    p.add_argument("--classify", choices=("attractors", "rules"), default="attractors",
+                   help="attractors (default): assign each run to the attractor it reaches, found by recurrences, "
+                        "with t_end as the maximum horizon; rules: classify by the end window of fixed-length runs")
+    p.add_argument("--t-end", type=finite_float, help="length of each run [s] (default 5; attractors: the maximum "
+                                                      "horizon, default 60)")
+    p.add_argument("--window", type=finite_float, help="rules: classification window at the end [s] "
                    f"(default {defaults.OUTCOME_WINDOW_FRACTION:g} t_end)")
+    p.add_argument("--dt", type=finite_float, help="attractors: sampling interval of the recurrence grid [s] "
+                                                   "(default 0.05)")
     p.add_argument("--tol", type=finite_float, default=defaults.MAP_TOL,
                    help=f"integrator tolerance (default {defaults.MAP_TOL:g})")
     p.add_argument("--fall-angle", type=finite_float, default=defaults.FALL_ANGLE,
@@ -37,8 +46,12 @@ def outcome_map(args) -> int:
 
     ranges = {k: getattr(args, k) for k in ("omega", "eps", "mu", "e", "dgamma0") if getattr(args, k) is not None}
     output = writable(args.output)
-    ds = run_map(ranges, output=output, scheduler=args.scheduler, threads=args.threads, t_end=args.t_end,
+    attractors = {}
+    if args.classify == "attractors":
+        attractors = {"classify": "attractors", "recurrence": {"dt": args.dt} if args.dt is not None else None}
+    t_end = args.t_end if args.t_end is not None else (60.0 if args.classify == "attractors" else 5.0)
+    ds = run_map(ranges, output=output, scheduler=args.scheduler, threads=args.threads, t_end=t_end,
                  window=args.window, tol=args.tol, fall_angle=args.fall_angle, chunk_size=args.chunk_size,
-                 batch_size=args.batch_size)
+                 batch_size=args.batch_size, **attractors)
     print(f"{output}: {ds.attrs['message']}")
     return 0
