@@ -338,6 +338,7 @@ class _Lane:
     buf_x: list = dataclasses.field(default_factory=list)
     buf_y: list = dataclasses.field(default_factory=list)
     buf_k: list = dataclasses.field(default_factory=list)
+    last: tuple = ()  # (t, x, y) of the last sample
 
 
 @dataclasses.dataclass
@@ -771,6 +772,7 @@ def map_points(problem: Problem, settings: RecurrenceSettings, x0, pars, groups=
                     decided = (label_of["failed"], k * dt, np.nan_to_num(X[:, q]), np.zeros(D))
                     continue
                 lab = step(lane, k * dt, X[:, q], Y[:, q], int(KEY[q]))
+                lane.last = (k * dt, X[:, q], Y[:, q])
                 if lab is not None:
                     decided = (lab, k * dt, X[:, q], Y[:, q])
             if decided is not None:
@@ -784,9 +786,9 @@ def map_points(problem: Problem, settings: RecurrenceSettings, x0, pars, groups=
                 finish(i, label_of[problem.terminal_labels[e]], float(ta.time[i]), x_now, y_now)
             elif oc == err_nf:
                 finish(i, label_of["failed"], float(ta.time[i]), np.nan_to_num(x_now), np.zeros(D))
-            elif lane.k > k_last:
-                y_now = problem.observe(x_now[:, None], np.array(ta.pars)[:, i:i + 1])[:, 0]
-                finish(i, label_of["undecided"], float(ta.time[i]), x_now, y_now)
+            elif lane.k > k_last:  # the horizon: the last sample is the final state
+                t_last, x_last, y_last = lane.last
+                finish(i, label_of["undecided"], t_last, x_last, y_last)
             elif oc != time_limit and int(oc) != int(hy.taylor_outcome.success):
                 finish(i, label_of["failed"], float(ta.time[i]), np.nan_to_num(x_now), np.zeros(D))
     return MapResult(labels, t_assign, final, final_y, events, found)
