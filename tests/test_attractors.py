@@ -20,6 +20,7 @@ from tippedisk_analysis.analysis import basins as bs
 from tippedisk_analysis.analysis import outcome_map as om
 from tippedisk_analysis.analysis import stability, sweeps
 from tippedisk_analysis.analysis import stationary as st
+from tippedisk_analysis.analysis.reduced import full_from_reduced
 from tippedisk_analysis.cli import main
 from tippedisk_analysis.models import ode
 from tippedisk_analysis.parameters import Friction, InitialState, Setup
@@ -196,7 +197,7 @@ def _near_spin(omega, eps, kick=0.02, n=4):
         y[0] += kick * math.cos(k)
         y[1] += kick * math.sin(k)
         y[5] += 10 * kick * math.sin(2 * k)
-        states.append(bs.full_of(y, r))
+        states.append(full_from_reduced(y, r))
     return np.array(states).T, ode.parameter_vector(setup)
 
 

@@ -45,7 +45,7 @@ from . import attractors as at
 from . import stability, sweeps
 from . import stationary as st
 from .reduced import STATE_NAMES as REDUCED_NAMES
-from .reduced import reduced_from_full
+from .reduced import full_from_reduced, reduced_from_full
 
 MODEL = ode.EULER
 PROJECTION = ("beta", "gamma", "alpha_dot")  # names the observe() cfunc can give: + beta_dot, gamma_dot
@@ -119,14 +119,6 @@ def reduced_of(states) -> np.ndarray:
     i = {n: k for k, n in enumerate(MODEL.state_names)}
     return reduced_from_full(x[i["alpha"]], x[i["beta"]], x[i["gamma"]], x[i["x_dot"]], x[i["y_dot"]],
                              x[i["omega_x"]], x[i["omega_y"]], x[i["omega_z"]])
-
-
-def full_of(reduced, r: float) -> np.ndarray:
-    """A model state (13,) of a reduced state (alpha = x = y = 0, contact closed, W_friction = 0)."""
-    beta, gamma, u_x, u_y, w_x, w_y, w_z = np.asarray(reduced, dtype=float)
-    beta_dot = w_x * math.cos(gamma) - w_y * math.sin(gamma)
-    return np.array([0.0, 0.0, r * math.sin(beta), 0.0, beta, gamma, u_x, u_y, r * math.cos(beta) * beta_dot,
-                     w_x, w_y, w_z, 0.0])
 
 
 def stable_segment(branch: str, omega: float, pars) -> tuple[float, float]:
@@ -254,7 +246,7 @@ class TippediskProblem(at.Problem):
         if eig > 0:  # linearly unstable: the run passes a saddle slowly; it is a transient
             return None
         segment = stable_segment(branch, omega, pars)
-        full = full_of(x, float(pars[ode.PARAMETER_NAMES.index("r")]))
+        full = full_from_reduced(x, float(pars[ode.PARAMETER_NAMES.index("r")]))
         return {"state": full, "branch": st.branch_sign(branch), "omega": omega, "omega_min": omega,
                 "omega_max": omega, "max_real_eig": eig, "stationary_deviation": dev, "energy_drift": 0.0,
                 "segment_min": segment[0], "segment_max": segment[1]}
@@ -311,7 +303,7 @@ class TippediskProblem(at.Problem):
                         self.grid.names else desc.extra["omega"], desc.extra["segment_min"]), desc.extra["segment_max"])
         member = st.stationary_state(branch, [omega])[:, 0]
         pars = ode.parameter_vector()  # the projection of a state does not depend on the parameters
-        y_member = self.observe(full_of(member, float(pars[ode.PARAMETER_NAMES.index("r")]))[:, None], pars)
+        y_member = self.observe(full_from_reduced(member, float(pars[ode.PARAMETER_NAMES.index("r")]))[:, None], pars)
         return float(np.max(np.abs(self.grid.difference(observed, y_member[:, 0]))))
 
 
