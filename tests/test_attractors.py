@@ -345,3 +345,25 @@ def test_fractions_config_refuses_bad_input():
         bs.FractionsConfig(parameter="omega", values=[10, 80, 3], ranges={"omega": [1, 2]})
     with pytest.raises(ParameterError, match="puts the disk flat"):
         bs.BasinConfig(axes={"beta0": [0.0, 1.0, 3]})
+
+
+def test_stored_benchmark_map_meets_the_checks_of_issue_13():
+    """data/attractors/attractor_map.nc (study attractor_map: the 64 x 64 benchmark map, horizon 60 s)."""
+    from pathlib import Path
+
+    ds = load(Path(__file__).resolve().parents[1] / "data" / "attractors" / "attractor_map.nc")
+    assert ds.sizes == {**ds.sizes, "omega": 64, "eps": 64} and ds.attrs["classify"] == "attractors"
+    assert float((ds["outcome"] == bs.labels()["undecided"]).mean()) <= 0.02
+    kinds = ds["attractor_kind"].attrs["flag_meanings"].split()
+    for k in range(ds.sizes["attractor"]):
+        a = ds.isel(attractor=k)
+        kind = kinds[int(a["attractor_kind"])]
+        assert kind in ("equilibrium", "rolling", "wobbling")  # no periodic or irregular attractor
+        if kind == "equilibrium":
+            assert float(a["attractor_stationary_deviation"]) <= 1e-6 and int(a["attractor_branch"]) == 1
+            np.testing.assert_allclose(a["attractor_state"], st.stationary_state("inverted", [float(
+                a["attractor_omega"])])[:, 0], atol=1e-6)
+            assert float(ds["attractor_distance"].where(ds["outcome"] == k).max()) <= float(a["attractor_radius"])
+        else:
+            assert float(a["attractor_energy_drift"]) < 0  # transients: they dissipate
+    assert int((ds["valid"] == 0).sum()) == 0
