@@ -23,7 +23,7 @@ from tippedisk_analysis.analysis import stationary as st
 from tippedisk_analysis.analysis.reduced import full_from_reduced
 from tippedisk_analysis.cli import main
 from tippedisk_analysis.models import ode
-from tippedisk_analysis.parameters import Friction, InitialState, Setup
+from tippedisk_analysis.parameters import Friction, Setup
 
 
 # ------------------------------------------------------------------ textbook problems
