@@ -8,8 +8,7 @@ import numpy as np
 import xarray as xr
 from matplotlib.colors import BoundaryNorm, ListedColormap
 
-from . import trajectories
-from .registry import FIGURES, figure
+from .registry import figure
 
 LABEL_COLOURS = {"undecided": "0.6", "left_grid": "0.3", "failed": "black", "fell": "tab:red",
                  "lift_off": "tab:pink"}
@@ -163,14 +162,3 @@ def attractor_outcome_map_figure(ds: xr.Dataset):
     fig.suptitle(f"Outcome map by attractors, {ds.attrs.get('paper_model', '')}, horizon {ds.attrs.get('t_end', '')} s"
                  + (f" ({extra})" if extra else ""), fontsize=10)
     return fig
-
-
-def _outcome_map_figure(ds: xr.Dataset):
-    """Outcome maps: by attractors (this module) or by rules (:func:`.trajectories.outcome_map_figure`)."""
-    if ds.attrs.get("classify") == "attractors":
-        return attractor_outcome_map_figure(ds)
-    return trajectories.outcome_map_figure(ds)
-
-
-# one figure function per kind: outcome maps dispatch on how they were classified
-FIGURES["outcome_map"] = _outcome_map_figure
