@@ -11,8 +11,10 @@ of the family direction d x*/d Omega = sign e_omega_x at every member (:mod:`.st
 residual [rhs, alpha_dot - Omega] therefore has dependent rows; the continuation core takes
 Gauss-Newton steps, the state Jacobian for the test functions is the deflated one, and the
 normal forms at special points are those of bifurcations from a line of equilibria without
-parameters (:mod:`.normal_forms`): a Hopf point is elliptic or hyperbolic (no periodic orbits
-are born), a real eigenvalue through zero is a transcritical point of the line.
+parameters of a C^1 field (:mod:`.normal_forms`; the C^1 term comes from |gamma_T| in (2.29),
+:func:`.reduced.nonsmooth_split`): hyperbolic, elliptic, or a repelling / attracting node; no
+periodic orbits are born at the Hopf points and no branch of other equilibria at the zero-eigenvalue
+points (docs/continuation.md).
 """
 
 from __future__ import annotations
@@ -313,15 +315,11 @@ def special_point(ds: xr.Dataset, label: str) -> tuple[int, str]:
 def _source(ds: xr.Dataset, index: int):
     config = config_of(ds)
     setup = Setup(**{k: v for k, v in config["setup"].items() if k == "gravity"},
-                  disk=_dataclass_from(Setup().disk, config["setup"]["disk"]),
-                  friction=_dataclass_from(Setup().friction, config["setup"]["friction"]))
+                  disk=dataclasses.replace(Setup().disk, **config["setup"]["disk"]),
+                  friction=dataclasses.replace(Setup().friction, **config["setup"]["friction"]))
     values = {name: float(ds[name].values[index]) for name in PARAMETERS}
     state = np.array([float(ds[name].values[index]) for name in reduced.STATE_NAMES])
     return setup, config.get("branch", "inverted"), values, state
-
-
-def _dataclass_from(template, values: dict):
-    return dataclasses.replace(template, **values)
 
 
 def continue_curve(ds: xr.Dataset, label: str, parameters=("omega", "eps"), *, bounds: dict | None = None,
