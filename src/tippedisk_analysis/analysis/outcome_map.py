@@ -26,6 +26,13 @@ Times that do not exist are stored as the fill value -1 s (documented in the var
 attributes; the outcome says which): ``inversion_time`` (first upward crossing of
 gamma = 0) and ``fall_time``.
 
+Attractor classification (``classify="attractors"``, :mod:`.basins`): each run is instead assigned to
+the attractor it reaches, found by recurrences in a cell grid (:mod:`.attractors`) with ``t_end`` as the
+maximum horizon; runs with equal (eps, mu, e) share the attractors found so far and stop early when they
+enter one. ``outcome`` is then the attractor id (>= 0, a table along the dimension ``attractor``) or a
+negative label (undecided, left_grid, failed, fell, lift_off), plus ``assignment_time``; the window
+quantities (gamma_turns, sin_gamma_mean, z_S_mean) are not computed.
+
 Execution: heyoka batch mode (``batch_size`` SIMD lanes, default 4: on the development
 machine ``hy.recommended_simd_size()`` = 8 was about 1.2-1.5x slower per run) over chunks of grid
 points; chunks run on threads, or on a dask.distributed cluster (see :mod:`.sweeps`).
@@ -48,11 +55,13 @@ from ..models import ode
 from ..parameters import Disk, Friction, InitialState, Setup, eccentricity_columns, to_dict
 from ..ranges import check_range
 from ..results import describe, make_attrs
-from . import sweeps
+from . import basins, sweeps
 
 MODEL = "ode-euler"
 OUTCOMES = {"not_inverted": 0, "inverted": 1, "fell": 2, "undecided": 3, "failed": 4, "rolling": 5}
 FILL_TIME = -1.0
+CLASSIFIERS = ("rules", "attractors")
+INITIAL_AXES = ("omega", "dgamma0")  # initial conditions; the other swept names are parameters
 
 # swept name: (units, long_name, default from Tables 1-3)
 SWEEPABLE = {
@@ -79,6 +88,8 @@ class MapConfig:
     chunk_size: int = CHUNK_SIZE
     batch_size: int = BATCH_SIZE  # SIMD lanes
     setup: dict = dataclasses.field(default_factory=lambda: to_dict(Setup()))
+    classify: str = "rules"  # or "attractors" (module docstring)
+    recurrence: dict | None = None  # attractors: settings of the recurrence core (basins.DEFAULT_RECURRENCE)
 
     def __post_init__(self):
         if isinstance(self.setup, Setup):
@@ -116,6 +127,10 @@ class MapConfig:
             raise ParameterError(f"chunk_size = {self.chunk_size!r} must be a positive integer")
         if self.batch_size not in (1, 2, 4, 8, 16):
             raise ParameterError(f"batch_size = {self.batch_size!r}; give 1, 2, 4, 8 or 16 SIMD lanes")
+        if self.classify not in CLASSIFIERS:
+            raise ParameterError(f"classify = {self.classify!r}; give one of {', '.join(CLASSIFIERS)}")
+        if self.classify == "attractors":
+            basins.recurrence_settings(self.t_end, self.recurrence)  # ParameterError naming the fix
         # validate every swept value through the parameter dataclasses (ParameterError naming the fix)
         for name, values in self.axes().items():
             for v in (values[0], values[-1]) if name != "e" else values:
@@ -136,14 +151,18 @@ class MapConfig:
         s = self.setup
         return Setup(Disk(**s["disk"]), Friction(**s["friction"]), s["gravity"])
 
-    def points(self, start: int = 0, stop: int | None = None) -> dict[str, np.ndarray]:
-        """Swept values of the flattened grid points [start, stop) (C order)."""
+    def points(self, start: int = 0, stop: int | None = None, index=None) -> dict[str, np.ndarray]:
+        """Swept values of the flattened grid points [start, stop) (C order), or of the flat ``index``."""
         axes = self.axes()
-        idx = np.unravel_index(np.arange(start, self.n_points if stop is None else stop), self.shape)
+        flat = np.arange(start, self.n_points if stop is None else stop) if index is None else np.asarray(index)
+        idx = np.unravel_index(flat, self.shape)
         return {name: axes[name][i] for name, i in zip(axes, idx)}
 
     def to_dict(self) -> dict:
-        return {"model": MODEL, **dataclasses.asdict(self)}
+        d = {"model": MODEL, **dataclasses.asdict(self)}
+        if self.classify == "rules":  # rule-based configurations stay as they were (resumable chunks)
+            del d["classify"], d["recurrence"]
+        return d
 
     @classmethod
     def from_dict(cls, d: dict) -> MapConfig:
@@ -238,7 +257,7 @@ RESULT_VARIABLES = {
 }
 
 
-def _prepare(config: MapConfig, start: int, stop: int):
+def _prepare(config: MapConfig, start: int, stop: int, index=None):
     """Initial states (with the two quadratures) and runtime parameters of points [start, stop).
 
     The swept physical parameters (mu, eps, e) only change entries of the base parameter vector
@@ -246,8 +265,8 @@ def _prepare(config: MapConfig, start: int, stop: int):
     only and is computed once per distinct pair.
     """
     base = config.base_setup()
-    pts = config.points(start, stop)
-    n = stop - start
+    pts = config.points(start, stop, index)
+    n = stop - start if index is None else len(index)
     model = ode.EULER
     pars = np.repeat(ode.parameter_vector(base, config.fall_angle, config.slip_smoothing)[:, None], n, axis=1)
     for name in ("mu", "eps"):
@@ -318,6 +337,8 @@ def run_chunk(config: MapConfig | dict, start: int, stop: int) -> dict:
     """
     if isinstance(config, dict):
         config = MapConfig.from_dict(config)
+    if config.classify == "attractors":
+        return _attractor_chunk(config, start, stop)
     k = kernel(float(config.tol), int(config.batch_size))
     B = k.batch_size
     x0, pars = _prepare(config, start, stop)
@@ -408,6 +429,8 @@ def _run_batch(ta, x0: np.ndarray, pars: np.ndarray, config: MapConfig) -> dict:
 
 def assemble(config: MapConfig, results: dict) -> xr.Dataset:
     """Dataset with dims = swept parameters from flat per-point results (C order)."""
+    if config.classify == "attractors":
+        return _assemble_attractors(config, results)
     axes = config.axes()
     dims = tuple(axes)
     shape = config.shape
@@ -474,6 +497,12 @@ def outcome_map(ranges: dict, *, output=None, scheduler=None, threads: int | Non
 
 def sweep(config: MapConfig) -> sweeps.Sweep:
     """The outcome map as a chunked, resumable :class:`.sweeps.Sweep`."""
+    if config.classify == "attractors":
+        return sweeps.Sweep("outcome map", config.to_dict(), config.n_points, int(config.chunk_size),
+                            basins.chunk_variables(), run_chunk, functools.partial(assemble, config),
+                            functools.partial(basins.warm_up, float(config.tol), int(config.batch_size)),
+                            bytes_per_point=8.0 * len(basins.chunk_variables()) + 16,
+                            seconds_per_point=SECONDS_PER_RUN_SECOND * config.t_end)
     return sweeps.Sweep("outcome map", config.to_dict(), config.n_points, int(config.chunk_size),
                         tuple(RESULT_VARIABLES), run_chunk, functools.partial(assemble, config),
                         functools.partial(kernel, float(config.tol), int(config.batch_size)),
@@ -484,3 +513,65 @@ BYTES_PER_POINT = sum(np.dtype(dtype).itemsize for dtype, _, _ in RESULT_VARIABL
 """Memory of one grid point's results (the dataset; sweeps.MERGE_FACTOR covers the copies at the merge)."""
 SECONDS_PER_RUN_SECOND = 1e-3
 """Work of one run per simulated second on one core (measured 0.8 ms with the default tol, batch 4)."""
+
+
+# --- classification by attractors (classify="attractors", module docstring) ---
+def attractor_order(config: MapConfig) -> tuple[np.ndarray, int]:
+    """(order, n_initial): the sweep visits the C-order flat indices ``order``, all initial conditions
+    (omega, dgamma0) of one parameter point (eps, mu, e) in a row, so runs sharing the parameters share
+    the attractors found; the j-th point of the sweep belongs to parameter group j // n_initial."""
+    names = list(config.ranges)
+    ic = [k for k, name in enumerate(names) if name in INITIAL_AXES]
+    par = [k for k, name in enumerate(names) if name not in INITIAL_AXES]
+    order = np.arange(config.n_points).reshape(config.shape).transpose(par + ic).ravel()
+    return order, int(np.prod([config.shape[k] for k in ic]))
+
+
+def _attractor_chunk(config: MapConfig, start: int, stop: int) -> dict:
+    order, n_ic = attractor_order(config)
+    x0, pars = _prepare(config, start, stop, index=order[start:stop])
+    groups = np.arange(start, stop) // n_ic
+    return basins.run_points(x0[: len(ode.EULER.state_names)], pars, groups, tol=config.tol,
+                             batch_size=config.batch_size, horizon=config.t_end, recurrence=config.recurrence,
+                             key_base=start)
+
+
+def _assemble_attractors(config: MapConfig, results: dict) -> xr.Dataset:
+    order, n_ic = attractor_order(config)
+    outcome, table_vars, table = basins.attractor_table(results, np.arange(config.n_points) // n_ic)
+    axes = config.axes()
+    dims, shape = tuple(axes), config.shape
+
+    def grid_values(v):  # sweep order -> C order on the grid
+        out = np.empty_like(np.asarray(v))
+        out[order] = v
+        return out.reshape(shape)
+
+    flag_values, flag_meanings = basins.outcome_flags(table)
+    data = {"outcome": (dims, grid_values(outcome), {
+        "units": "1", "long_name": "attractor id (>= 0, see dimension attractor) or negative label",
+        "flag_values": flag_values, "flag_meanings": flag_meanings,
+        "classification": "recurrences in a cell grid (analysis/attractors.py, analysis/basins.py)"})}
+    data["assignment_time"] = (dims, grid_values(results["t_assign"]), {
+        "units": "s", "long_name": "time at which the run was assigned to an attractor or labelled"})
+    for name, (dtype, units, long_name) in basins.POINT_VARIABLES.items():
+        attrs = {"units": units, "long_name": long_name}
+        if name.endswith("_time"):
+            attrs["fill_value_meaning"] = f"{FILL_TIME:g} s where the event did not happen"
+        elif name == "valid":
+            attrs.update(flag_values=np.array([0, 1], dtype=np.int8), flag_meanings="lift_off valid")
+        data[name] = (dims, grid_values(np.asarray(results[name], dtype=dtype)), attrs)
+    data.update(table_vars)
+    coords = {name: (name, values, {"units": SWEEPABLE[name][0], "long_name": SWEEPABLE[name][1],
+                                    **({"comment": config.base_setup().disk.eccentricity_rule} if name == "e" else {})})
+              for name, values in axes.items()}
+    coords["attractor"] = ("attractor", np.arange(len(table)), {"long_name": "attractor id"})
+    coords.update(basins.table_coords())
+    message = basins.summary(outcome, table, config.n_points, config.t_end)
+    status = "partial" if np.any(outcome == basins.labels()["failed"]) else "completed"
+    ds = xr.Dataset(data, coords=coords,
+                    attrs=make_attrs("outcome_map", config.to_dict(), status, message, model=MODEL,
+                                     paper_model=ode.EULER.paper_name, swept=" ".join(dims), t_end=config.t_end,
+                                     classify="attractors",
+                                     e_sweep=config.base_setup().disk.eccentricity_rule if "e" in axes else None))
+    return describe(ds)

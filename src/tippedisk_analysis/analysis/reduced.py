@@ -24,8 +24,8 @@ above; beta_dot, gamma_dot and alpha_dot are the inverse of (3.3) from the same 
 
 Derivatives are exact: heyoka differentiates the expressions symbolically (``hy.diff_tensors``)
 and compiles them once per process (``hy.cfunc``, cached on disk by heyoka): the Jacobian for
-stability (:mod:`.stability`), and the tensors up to third order, including derivatives with
-respect to the runtime parameters, for continuation and normal forms (:mod:`.continuation`).
+stability (:mod:`.stability`), and (:func:`field`) the tensors up to third order, including
+derivatives with respect to the runtime parameters, for continuation and normal forms.
 Every function evaluates in batches: states (7, N), parameters (11,) or (11, N) in the order of
 :data:`tippedisk_analysis.models.ode.PARAMETER_NAMES` (:func:`tippedisk_analysis.models.ode.parameter_vector`).
 """
@@ -40,9 +40,13 @@ import numpy as np
 
 from .. import kinematics as kin
 from ..models import ode
+from .vector_fields import CompiledField
 
 STATE_NAMES = ("beta", "gamma", "u_x", "u_y", "omega_x", "omega_y", "omega_z")
 N_STATE = len(STATE_NAMES)
+# runtime parameters the derivative tensors differentiate by (continuation parameters and the inertia)
+TENSOR_PARAMETERS = ("mu", "eps", "e", "A", "B", "C")
+SLIP_NORM_INDEX = len(ode.PARAMETER_NAMES)  # hy.par index of |gamma_T| in the split system (nonsmooth_split)
 OMEGA_X_INDEX = STATE_NAMES.index("omega_x")  # the direction of the spin family (stationary.stationary_state)
 
 
@@ -58,9 +62,14 @@ class ReducedSystem:
 
 
 @functools.lru_cache(maxsize=None)
-def reduced_system() -> ReducedSystem:
-    """Build the reduced right-hand side from ODE Model 1's expressions (alpha = 0 substituted)."""
-    full_vars, sys, _fall, outputs = ode.system(ode.EULER)
+def reduced_system(split_slip_norm: bool = False) -> ReducedSystem:
+    """Build the reduced right-hand side from ODE Model 1's expressions (alpha = 0 substituted).
+
+    split_slip_norm: |gamma_T| in (2.29) replaced by the runtime parameter hy.par[SLIP_NORM_INDEX]
+    (for :func:`nonsmooth_split`).
+    """
+    slip_norm = hy.par[SLIP_NORM_INDEX] if split_slip_norm else None
+    full_vars, sys, _fall, outputs = ode.system(ode.EULER, slip_norm)
     names = ode.EULER.state_names
     rhs_full = dict(zip(names, (rhs for _var, rhs in sys)))
     out = dict(zip(ode.OUTPUT_NAMES, outputs))
@@ -165,3 +174,50 @@ def reduced_from_full(alpha, beta, gamma, x_dot, y_dot, omega_x, omega_y, omega_
     u_y = -sa * np.asarray(x_dot) + ca * np.asarray(y_dot)
     return np.atleast_2d(np.array([beta, gamma, u_x, u_y, omega_x, omega_y, omega_z], dtype=float).T).T.reshape(
         len(STATE_NAMES), -1)
+
+
+def full_from_reduced(state, r: float, alpha: float = 0.0) -> np.ndarray:
+    """ODE Model 1 state (ode.EULER.state_names) from a reduced state (7,): x = y = 0, the given alpha,
+    z = r sin(beta), z_dot = r cos(beta) beta_dot (g_N1 = 0 and its derivative), v_G from u turned by
+    alpha (3.1), W_friction = 0. The inverse of :func:`reduced_from_full`."""
+    beta, gamma, u_x, u_y, w_x, w_y, w_z = np.asarray(state, dtype=float)
+    beta_dot = w_x * np.cos(gamma) - w_y * np.sin(gamma)  # inverse of (3.3)
+    ca, sa = np.cos(alpha), np.sin(alpha)
+    return np.array([0.0, 0.0, r * np.sin(beta), alpha, beta, gamma, ca * u_x - sa * u_y, sa * u_x + ca * u_y,
+                     r * np.cos(beta) * beta_dot, w_x, w_y, w_z, 0.0])
+
+
+@functools.lru_cache(maxsize=None)
+def field() -> CompiledField:
+    """The reduced right-hand side (7 outputs) and alpha_dot (output 7) with exact derivative tensors
+    with respect to the 7 states and the runtime parameters TENSOR_PARAMETERS (in that order)."""
+    red = reduced_system()
+    return CompiledField([*red.rhs, red.alpha_dot], red.variables, [ode.P[name] for name in TENSOR_PARAMETERS])
+
+
+def parameter_derivative_index(name: str) -> int:
+    """Position of runtime parameter ``name`` among the arguments of ``field().tensor``."""
+    return N_STATE + TENSOR_PARAMETERS.index(name)
+
+
+@functools.lru_cache(maxsize=None)
+def _split_fields() -> tuple[CompiledField, CompiledField]:
+    split = reduced_system(split_slip_norm=True)
+    red = reduced_system()
+    return (CompiledField(split.rhs, split.variables, [hy.par[SLIP_NORM_INDEX]]),
+            CompiledField(red.slip, red.variables))
+
+
+def nonsmooth_split(state, pars) -> tuple[np.ndarray, np.ndarray]:
+    """The non-smooth quadratic term of the reduced rhs at a zero-slip state: (G_xs (7, 7), Gamma (2, 7)).
+
+    The law (2.29) depends on |gamma_T|, which is not differentiable at zero slip, so the rhs is
+    only C^1 there: f(x* + w) = J w + B(w, w) / 2 + N(w) + O(|w|^3) with the odd, degree-two term
+    N(w) = (G_xs w) |Gamma w|, G_xs = d^2 f / dx d|gamma_T| (f written with |gamma_T| as a separate
+    argument) and Gamma = d gamma_T / dx. (The model's analytic |gamma_T| = sqrt(|gamma_T|^2 +
+    delta^2) - delta has zero slope at zero slip, so B is the smooth part.) Exact derivatives.
+    """
+    split, slip = _split_fields()
+    pars_split = np.append(np.asarray(pars, dtype=float)[: SLIP_NORM_INDEX], 0.0)
+    T2 = split.tensor(state, pars_split, 2)
+    return T2[:, :N_STATE, N_STATE], slip.tensor(state, pars, 1)

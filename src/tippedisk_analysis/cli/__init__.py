@@ -19,8 +19,9 @@ import warnings
 
 from ..errors import TippediskError, TippediskWarning
 from ..version import __version__
-from . import (animate, bifurcation, outcome_map, plot, poincare, simulate, stability_map,  # noqa: F401 (registration)
-               study)
+from . import (animate, bifurcation, continuation, outcome_map, plot, poincare, simulate,  # noqa: F401
+               stability_map, study)  # registration
+from . import basins  # noqa: F401 (registration)
 from .registry import COMMANDS
 
 EXIT_INTERRUPTED = 130  # 128 + SIGINT, as shells report it

@@ -1,4 +1,7 @@
-"""``tippedisk outcome-map``: classify runs over a grid of (Omega, eps[, mu, e, dgamma0]); resumable."""
+"""``tippedisk outcome-map``: classify runs over a grid of (Omega, eps[, mu, e, dgamma0]); resumable.
+
+By default each run is assigned to the attractor it reaches (``--classify attractors``, analysis/basins.py);
+``--classify rules`` keeps the rule-based classification of fixed-length runs (analysis/outcome_map.py)."""
 
 from __future__ import annotations
 
@@ -18,9 +21,15 @@ def _arguments(p) -> None:
                    "fixed: A, B, C about G (--disk table2 / given), or the hole geometry but its offset b, with "
                    "m, A, B, C recomputed (--disk geometry)")
     p.add_argument("--dgamma0", type=range_type("dgamma0"), help="START:STOP:N gamma(0) + pi/2 [rad] (default 0.1)")
-    p.add_argument("--t-end", type=finite_float, default=5.0, help="length of each run [s] (default 5)")
-    p.add_argument("--window", type=finite_float, help="classification window at the end [s] "
+    p.add_argument("--classify", choices=("attractors", "rules"), default="attractors",
+                   help="attractors (default): assign each run to the attractor it reaches, found by recurrences, "
+                        "with t_end as the maximum horizon; rules: classify by the end window of fixed-length runs")
+    p.add_argument("--t-end", type=finite_float, help="length of each run [s] (default 5; attractors: the maximum "
+                                                      "horizon, default 60)")
+    p.add_argument("--window", type=finite_float, help="rules: classification window at the end [s] "
                    f"(default {defaults.OUTCOME_WINDOW_FRACTION:g} t_end)")
+    p.add_argument("--dt", type=finite_float, help="attractors: sampling interval of the recurrence grid [s] "
+                                                   "(default 0.05)")
     p.add_argument("--tol", type=finite_float, default=defaults.MAP_TOL,
                    help=f"integrator tolerance (default {defaults.MAP_TOL:g})")
     p.add_argument("--fall-angle", type=finite_float, default=defaults.FALL_ANGLE,
@@ -44,8 +53,12 @@ def outcome_map(args) -> int:
     ranges = {k: getattr(args, k) for k in ("omega", "eps", "mu", "e", "dgamma0") if getattr(args, k) is not None}
     setup = Setup(disk=disk_from_args(args, sweep_e=args.e[0] if args.e else None, e_swept=True))
     output = output_path(args)
-    ds = run_map(ranges, output=output, scheduler=args.scheduler, threads=args.threads, t_end=args.t_end,
+    attractors = {}
+    if args.classify == "attractors":
+        attractors = {"classify": "attractors", "recurrence": {"dt": args.dt} if args.dt is not None else None}
+    t_end = args.t_end if args.t_end is not None else (60.0 if args.classify == "attractors" else 5.0)
+    ds = run_map(ranges, output=output, scheduler=args.scheduler, threads=args.threads, t_end=t_end,
                  window=args.window, tol=args.tol, fall_angle=args.fall_angle, chunk_size=args.chunk_size,
-                 batch_size=args.batch_size, setup=setup, overwrite=args.overwrite)
+                 batch_size=args.batch_size, setup=setup, overwrite=args.overwrite, **attractors)
     print(f"{show(output)}: {ds.attrs['message']}")
     return 0

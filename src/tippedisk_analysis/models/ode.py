@@ -105,11 +105,14 @@ class ContactDynamics:
     g_N1: object  # gap at C1 (2.12) [m]
 
 
-def contact_dynamics(trig: Trig, r_OG, v_G, omega) -> ContactDynamics:
+def contact_dynamics(trig: Trig, r_OG, v_G, omega, slip_norm=None) -> ContactDynamics:
     """Newton-Euler equations with the bilateral contact at C1 and smooth Coulomb friction.
 
     trig: sin/cos of the Euler angles; r_OG, v_G: position and velocity of G (I-frame);
     omega: angular velocity (B-frame). Vectors below are in G-components unless named _B/_I.
+    slip_norm: an expression to use for |gamma_T| in (2.29) instead of the slip's own norm (the
+    normal forms of analysis/ need the law's dependence on |gamma_T| separately, since |gamma_T|
+    is not differentiable at zero slip); default the model's analytic |gamma_T|.
     """
     m, e, r, g = P["m"], P["e"], P["r"], P["gravity"]
     theta_S = [P["A"], P["B"] - m * e * e, P["C"] - m * e * e]
@@ -125,7 +128,8 @@ def contact_dynamics(trig: Trig, r_OG, v_G, omega) -> ContactDynamics:
     gamma_N = _dot(v_C, ez_I)  # (2.14)
     slip = [v_C[i] - gamma_N * ez_I[i] for i in range(3)]
     slip_squared = _dot(v_C, v_C) - gamma_N * gamma_N
-    k = P["mu"] / (slip_magnitude(slip_squared, P["slip_smoothing"]) + P["eps"])  # (2.29)
+    norm = slip_magnitude(slip_squared, P["slip_smoothing"]) if slip_norm is None else slip_norm
+    k = P["mu"] / (norm + P["eps"])  # (2.29)
     n = [ez_I[i] - k * slip[i] for i in range(3)]  # F = lambda_N n
 
     # Psi = psi0 + lambda_N psi1: Euler's equation about S, B-frame
@@ -178,17 +182,17 @@ class OdeModel:
     name: str
     paper_name: str
     orientation: tuple[str, ...]
-    build: Callable[[list], tuple[Trig, list, ContactDynamics, list]]
+    build: Callable[..., tuple[Trig, list, ContactDynamics, list]]  # (variables, slip_norm)
 
     @property
     def state_names(self) -> tuple[str, ...]:
         return ("x", "y", "z", *self.orientation, "x_dot", "y_dot", "z_dot", "omega_x", "omega_y", "omega_z",
                 "W_friction")
 
-    def equations(self):
+    def equations(self, slip_norm=None):
         """(variables, (trig, orientation rates, ContactDynamics, Euler angles))."""
         variables = hy.make_vars(*self.state_names)
-        return variables, self.build(variables)
+        return variables, self.build(variables, slip_norm)
 
 
 def _split(variables, n_orient):
@@ -199,20 +203,20 @@ def _split(variables, n_orient):
     return r_OG, orient, v_G, omega
 
 
-def _build_euler(variables):
+def _build_euler(variables, slip_norm=None):
     r_OG, (alpha, beta, gamma), v_G, omega = _split(variables, 3)
     trig = Trig(hy.sin(alpha), hy.cos(alpha), hy.sin(beta), hy.cos(beta), hy.sin(gamma), hy.cos(gamma))
-    dyn = contact_dynamics(trig, r_OG, v_G, omega)
+    dyn = contact_dynamics(trig, r_OG, v_G, omega, slip_norm)
     return trig, dyn.euler_rates, dyn, [alpha, beta, gamma]  # (3.8)
 
 
-def _build_quaternion(variables):
+def _build_quaternion(variables, slip_norm=None):
     r_OG, p, v_G, omega = _split(variables, 4)
     R = kin.rotation_entries_quaternion(*p)
     sb = hy.sqrt(R[0][2] * R[0][2] + R[1][2] * R[1][2])  # (2.9)
     # read off (3.2): R13 = sa sb, R23 = -ca sb, R31 = sb sg, R32 = sb cg, R33 = cb
     trig = Trig(R[0][2] / sb, -R[1][2] / sb, sb, R[2][2], R[2][0] / sb, R[2][1] / sb)
-    dyn = contact_dynamics(trig, r_OG, v_G, omega)
+    dyn = contact_dynamics(trig, r_OG, v_G, omega, slip_norm)
     angles = [hy.atan2(R[0][2], -R[1][2]), hy.acos(R[2][2]), hy.atan2(R[2][0], R[2][1])]  # inverse of (3.2)
     return trig, kin.quaternion_rate_entries(*p, *omega), dyn, angles  # (3.44)
 
@@ -221,13 +225,13 @@ EULER = OdeModel("ode-euler", "ODE Model 1", ("alpha", "beta", "gamma"), _build_
 QUATERNION = OdeModel("ode-quaternion", "ODE Model 2", ("p0", "p1", "p2", "p3"), _build_quaternion)
 
 
-def system(model: OdeModel):
+def system(model: OdeModel, slip_norm=None):
     """(variables, sys, fall, outputs) of ``model``: the heyoka state variables, the system
     [(variable, rhs)], the fall event expression and the outputs named in OUTPUT_NAMES
     (Euler angles and rates (3.8), z_S, g_N1, gamma_N1, lambda_N, slip, E_kin, E_pot,
     friction power).
     """
-    variables, (trig, orient_rates, dyn, angles) = model.equations()
+    variables, (trig, orient_rates, dyn, angles) = model.equations(slip_norm)
     n_o = len(model.orientation)
     v_G = variables[3 + n_o:6 + n_o]
     rhs = [*v_G, *orient_rates, *dyn.a_G, *dyn.psi, dyn.friction_power]

@@ -6,6 +6,7 @@ import matplotlib.pyplot as plt
 import xarray as xr
 from matplotlib.colors import BoundaryNorm, ListedColormap
 
+from .attractors import attractor_outcome_map_figure
 from .labels import axis_label
 from .registry import figure
 
@@ -25,7 +26,10 @@ def poincare_figure(ds: xr.Dataset):
 
 @figure("outcome_map")
 def outcome_map_figure(ds: xr.Dataset):
-    """Outcome classes and inversion time over the first two swept parameters."""
+    """Outcome classes and inversion time over the first two swept parameters (maps classified by
+    attractors: :func:`.attractors.attractor_outcome_map_figure`)."""
+    if ds.attrs.get("classify") == "attractors":
+        return attractor_outcome_map_figure(ds)
     dims = list(ds["outcome"].dims)
     sel = {d: 0 for d in dims[2:]}  # further swept parameters: their first value
     out = ds["outcome"].isel(sel)

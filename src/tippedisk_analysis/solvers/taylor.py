@@ -62,14 +62,16 @@ class Trajectory:
     t_final: float
 
 
-def integrate(model_name: str, setup: Setup, initial: InitialState, t_end: float, dt_output: float,
+def integrate(model_name: str, setup: Setup, initial: InitialState | np.ndarray, t_end: float, dt_output: float,
               tol: float, fall_angle: float, slip_smoothing: float) -> Trajectory:
+    """Integrate from ``initial``: an InitialState (closed contact at C1 without slip, (6.2)) or a full
+    state vector of the model (ode.OdeModel.state_names order, e.g. from reduced.full_from_reduced)."""
     cm = compiled(model_name, tol)
     ta = copy.copy(cm.integrator)
     pars = ode.parameter_vector(setup, fall_angle, slip_smoothing)
     ta.pars[:] = pars
     ta.time = 0.0
-    ta.state[:] = ode.initial_state_vector(cm.model, setup, initial)
+    ta.state[:] = initial if isinstance(initial, np.ndarray) else ode.initial_state_vector(cm.model, setup, initial)
     ta.reset_cooldowns()
 
     grid = output_grid(t_end, dt_output)

@@ -18,7 +18,7 @@ from ...models import prox
 from ...parameters import InitialState, Setup
 from . import layout as L
 from .checkpoint import Checkpoint, fingerprint
-from .models import EULER, MoreauModel
+from .models import CONTENSOU, EULER, MoreauModel
 from .step import contact_gaps, orientation, run_steps
 
 
@@ -48,7 +48,7 @@ def initial_frame(R: np.ndarray) -> np.ndarray:
 
 def parameter_vectors(model: MoreauModel, setup: Setup, *, dt: float, tol: float, max_iter: int, r_N: float,
                       r_T: float, r_tau: float, r_R: float, normalize_quaternion: bool, fall_angle: float,
-                      store_every: int) -> tuple[np.ndarray, np.ndarray]:
+                      store_every: int, contensou_torque_share: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """(par, flags): the float and integer vectors of :mod:`.layout`."""
     d, f = setup.disk, setup.friction
     inertia = d.inertia_S
@@ -58,7 +58,7 @@ def parameter_vectors(model: MoreauModel, setup: Setup, *, dt: float, tol: float
                          (L.MU_TAU, f.mu_tau), (L.MU_R, f.mu_R), (L.CONTACT_RADIUS, f.contact_radius),
                          (L.E_N, f.e_N), (L.E_T, f.e_T), (L.E_TAU, f.e_tau), (L.E_R, f.e_R), (L.DT, dt), (L.TOL, tol),
                          (L.R_N, r_N), (L.R_T, r_T), (L.R_TAU, r_tau), (L.R_R, r_R),
-                         (L.SIN_FALL_ANGLE, math.sin(fall_angle))):
+                         (L.SIN_FALL_ANGLE, math.sin(fall_angle)), (L.CONTENSOU_TORQUE_SHARE, contensou_torque_share)):
         par[index] = value
     flags = np.empty(L.N_FLAGS, dtype=np.int64)
     for index, value in ((L.PARAMETERIZATION, model.parameterization), (L.LAW, model.law),
@@ -70,6 +70,16 @@ def parameter_vectors(model: MoreauModel, setup: Setup, *, dt: float, tol: float
 
 def default_fall_angle(model: MoreauModel) -> float:
     return defaults.FALL_ANGLE if model.parameterization == EULER else defaults.FALL_ANGLE_QUATERNION_MOREAU
+
+
+def _validate_torque_share(model, share) -> float:
+    if isinstance(share, bool) or not (isinstance(share, int | float | np.floating) and 0.0 <= share <= 1.0):
+        raise ParameterError(f"contensou_torque_share = {share!r} must be a number in [0, 1]; give 1 (the law "
+                             "(2.24)-(2.27), default) or 0 (the diagnostic variant without pivoting torque)")
+    if share != 1.0 and model.law != CONTENSOU:
+        raise ParameterError(f"contensou_torque_share applies to the Coulomb-Contensou Models 3/4 only, not to "
+                             f"{model.paper_name} ({model.name}); leave it at 1")
+    return float(share)
 
 
 def _validate(model, dt, tol, store_every, max_iter, gains, fall_angle, t_end):
@@ -96,9 +106,10 @@ def integrate(model: MoreauModel, setup: Setup, initial: InitialState, t_end: fl
               tol: float = defaults.MOREAU_TOL, store_every: int | None = None,
               max_iter: int = defaults.MOREAU_MAX_ITER, r_N: float = defaults.MOREAU_GAINS["r_N"],
               r_T: float = defaults.MOREAU_GAINS["r_T"], r_tau: float = defaults.MOREAU_GAINS["r_tau"],
-              r_R: float = defaults.MOREAU_GAINS["r_R"], normalize_quaternion: bool = False,
+              r_R: float = defaults.MOREAU_GAINS["r_R"],
+              normalize_quaternion: bool = defaults.MOREAU_NORMALIZE_QUATERNION,
               fall_angle: float | None = None, progress: bool | None = None, state=None,
-              checkpoint: str | os.PathLike | None = None):
+              checkpoint: str | os.PathLike | None = None, contensou_torque_share: float = 1.0):
     """Run the step loop; returns (stored rows, status code, failures, steps, wall time, options used).
 
     ``state = (q, u)`` replaces the closed rest contact of ``initial`` (e.g. a drop test):
@@ -106,7 +117,23 @@ def integrate(model: MoreauModel, setup: Setup, initial: InitialState, t_end: fl
     ``checkpoint``: a file that receives the loop's full state every ``CHECKPOINT_SECONDS`` of
     wall time; a later call with the same arguments resumes from it (finished steps are not
     redone, the result is bitwise that of an uninterrupted run), and it is removed at the end.
+
+    ``normalize_quaternion`` (quaternion Models 2, 4, 6, 8, 10): p <- p / |p| after each step, as the
+    paper prescribes after (3.67) (default); False keeps the unnormalised scheme for drift studies.
+
+    ``contensou_torque_share`` (Models 3/4 only; a diagnostic variant, not a friction law): the share
+    in [0, 1] of the Coulomb-Contensou pivoting torque eps_i P_tau that acts on the disk. 1 (default)
+    is the law (2.24)-(2.27). Below 1 the spin still regularises the sliding force through the ball
+    (gamma_tau = eps_i omega_IB enters the prox unchanged), but the pivoting impulse does no work on
+    the disk in the share removed: not a consistent friction law. With 0 and a contact radius of
+    2.5-2.9 mm it reproduces the paper's Figs. 9, 10 and 15 (docs/contensou_investigation.md). The
+    stored P_tau is the prox impulse either way.
     """
+    share = _validate_torque_share(model, contensou_torque_share)
+    if not (isinstance(normalize_quaternion, bool | np.bool_) or normalize_quaternion in (0, 1)):
+        raise ParameterError(f"normalize_quaternion = {normalize_quaternion!r} must be True (default, Sect. 3.2 "
+                             "after (3.67)) or False (the unnormalised drift study)")
+    normalize_quaternion = bool(normalize_quaternion)
     if store_every is None:
         store_every = max(1, int(round(defaults.MOREAU_STORE_INTERVAL / dt)))
     if fall_angle is None:
@@ -118,7 +145,7 @@ def integrate(model: MoreauModel, setup: Setup, initial: InitialState, t_end: fl
         raise ParameterError(f"t_end = {t_end} s is shorter than one step dt = {dt} s; give t_end >= dt")
     par, flags = parameter_vectors(model, setup, dt=dt, tol=tol, max_iter=max_iter,
                                    normalize_quaternion=normalize_quaternion, fall_angle=fall_angle,
-                                   store_every=store_every, **gains)
+                                   store_every=store_every, contensou_torque_share=share, **gains)
     q, u, ex_G = initial_state(model, setup, initial)
     if state is not None:
         q, u = np.array(state[0], dtype=float), np.array(state[1], dtype=float)
@@ -178,5 +205,6 @@ def integrate(model: MoreauModel, setup: Setup, initial: InitialState, t_end: fl
     if resume is not None:
         resume.remove()
     options = {"dt": dt, "tol": tol, "store_every": store_every, "max_iter": max_iter, **gains,
-               "normalize_quaternion": int(normalize_quaternion), "fall_angle": fall_angle}
+               "normalize_quaternion": int(normalize_quaternion), "fall_angle": fall_angle,
+               **({"contensou_torque_share": share} if model.law == CONTENSOU else {})}
     return out[:rows], status, int(stats[L.STAT_FAILURES]), done, wall, options

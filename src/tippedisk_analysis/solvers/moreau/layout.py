@@ -5,7 +5,7 @@ numba reads these module-level integers as compile-time constants.
 
 # float parameter vector ``par``
 (M, E, RADIUS, A_S, B_S, C_S, GRAVITY, MU, EPS, MU_TAU, MU_R, CONTACT_RADIUS, E_N, E_T, E_TAU, E_R, DT, TOL,
- R_N, R_T, R_TAU, R_R, SIN_FALL_ANGLE, N_PAR) = range(24)
+ R_N, R_T, R_TAU, R_R, SIN_FALL_ANGLE, CONTENSOU_TORQUE_SHARE, N_PAR) = range(25)
 
 # integer flags ``flags``
 PARAMETERIZATION, LAW, PIVOT_CONTOUR, MAX_ITER, NORMALIZE_QUATERNION, STORE_EVERY, N_FLAGS = range(7)

@@ -48,4 +48,4 @@ def _models() -> dict[str, MoreauModel]:
 
 MODELS: dict[str, MoreauModel] = _models()
 OPTIONS = ("dt", "tol", "store_every", "max_iter", "r_N", "r_T", "r_tau", "r_R", "normalize_quaternion",
-           "fall_angle", "progress", "checkpoint")
+           "fall_angle", "progress", "checkpoint", "contensou_torque_share")

@@ -15,6 +15,12 @@ Per step:
 4. u_E from the impulses, q_E = q_M + dt/2 F(q_M) u_E (optionally normalise the quaternion).
 
 Impulses are warm-started from the previous step's values for contacts that stay closed.
+
+Coulomb-Contensou torque share (diagnostic variant, Models 3/4): each column j carries a share s_j of
+its impulse that acts on the disk, 1 except for the Contensou tau column, which gets
+``par[CONTENSOU_TORQUE_SHARE]``. The contact velocities use W_j unscaled (gamma_tau = eps_i omega_IB,
+so the ball still couples spin and sliding), the Delassus matrix and the end velocity use s_k W_k:
+G_jk = W_j^T M^-1 W_k s_k, v_E = v_free + M^-1 sum_k s_k W_k P_k. s = 1 is the law (2.24)-(2.27).
 Every array index is named in :mod:`.layout`.
 """
 
@@ -29,7 +35,8 @@ from ...defaults import CONTOUR_REGULARISATION
 from ...models import moreau_geometry as geo
 from . import force_laws as law
 from .layout import (A_S, B_S, C_S, COL_GAP, COL_IMPULSE, COL_ITER_MAX, COL_ITER_MEAN, COL_N_CLOSED, COL_Q,
-                     COL_TIME, COL_U, CONTACT_RADIUS, DT, E, E_N, E_R, E_T, E_TAU, EPS, GRAVITY, IMPULSE_N,
+                     COL_TIME, COL_U, CONTACT_RADIUS, CONTENSOU_TORQUE_SHARE, DT, E, E_N, E_R, E_T, E_TAU, EPS, GRAVITY,
+                     IMPULSE_N,
                      IMPULSE_R, IMPULSE_TAU, IMPULSE_TX, IMPULSE_TY, LAW, M, MAX_COLUMNS, MAX_ITER, MU, MU_R,
                      MU_TAU, N_CONTACTS, N_IMPULSES, NORMALIZE_QUATERNION, PARAMETERIZATION, PIVOT_CONTOUR, R_N,
                      R_R, R_T, R_TAU, RADIUS, SIN_FALL_ANGLE, STAT_FAILURES, STAT_ITER_MAX, STAT_ITER_SUM,
@@ -117,6 +124,8 @@ def run_steps(q, u, ex_G, P_last, par, flags, ball, n_steps, step0, out, row0, s
     r_col = np.zeros(MAX_COLUMNS)  # prox gain of each column, capped by the Delassus diagonal
     column_contact = np.zeros(MAX_COLUMNS, np.int64)
     column_kind = np.zeros(MAX_COLUMNS, np.int64)
+    column_share = np.ones(MAX_COLUMNS)  # share of the column's impulse acting on the disk (module docstring)
+    tau_share = par[CONTENSOU_TORQUE_SHARE] if friction_law == CONTENSOU else 1.0
     column = np.zeros((N_CONTACTS, N_IMPULSES), np.int64)  # column of (contact, kind), -1 if absent
     xi = np.zeros(N_IMPULSES)
     gamma_E = np.zeros(N_IMPULSES)
@@ -186,6 +195,7 @@ def run_steps(q, u, ex_G, P_last, par, flags, ball, n_steps, step0, out, row0, s
                 column[i, kind] = nc
                 column_contact[nc] = i
                 column_kind[nc] = kind
+                column_share[nc] = 1.0
                 nc += 1
             if has_tau:  # (3.61): w_tau = eps_i [0, R^T e_z]
                 W[nc, 0:3] = 0.0
@@ -194,6 +204,7 @@ def run_steps(q, u, ex_G, P_last, par, flags, ball, n_steps, step0, out, row0, s
                 column[i, IMPULSE_TAU] = nc
                 column_contact[nc] = i
                 column_kind[nc] = IMPULSE_TAU
+                column_share[nc] = tau_share
                 nc += 1
             if pivot_contour == 1:  # (3.63): gamma_R = -r phi_dot
                 W[nc, 0:3] = 0.0
@@ -202,6 +213,7 @@ def run_steps(q, u, ex_G, P_last, par, flags, ball, n_steps, step0, out, row0, s
                 column[i, IMPULSE_R] = nc
                 column_contact[nc] = i
                 column_kind[nc] = IMPULSE_R
+                column_share[nc] = 1.0
                 nc += 1
         # Delassus matrix and free / start-of-step contact velocities
         for j in range(nc):
@@ -217,8 +229,8 @@ def run_steps(q, u, ex_G, P_last, par, flags, ball, n_steps, step0, out, row0, s
                 gs = 0.0
                 for l in range(6):
                     gs += W[j, l] * W[k, l] * m_inv[l]
-                delassus[j, k] = gs
-                delassus[k, j] = gs
+                delassus[j, k] = gs * column_share[k]  # gamma_j += W_j^T M^-1 (s_k W_k) P_k
+                delassus[k, j] = gs * column_share[j]
         # gains: r_j G_jj < 2 makes the sweep of one column contract; GAIN_CAP / G_jj keeps a margin. Inactive in
         # ordinary steps (r_N G_NN ~ 1); it matters where a force direction grows without bound, e.g. the
         # contour direction (3.64) ~ 1 / sin(beta) of a nearly flat disk. The solution does not depend on r.
@@ -288,7 +300,7 @@ def run_steps(q, u, ex_G, P_last, par, flags, ball, n_steps, step0, out, row0, s
         for l in range(6):
             v_end = v_free[l]
             for j in range(nc):
-                v_end += W[j, l] * P[j] * m_inv[l]
+                v_end += W[j, l] * P[j] * column_share[j] * m_inv[l]
             v_A[l] = v_end  # v_E
         for i in range(N_CONTACTS):
             P_last[i, :] = 0.0

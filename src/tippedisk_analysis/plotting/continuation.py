@@ -1,0 +1,109 @@
+"""Continuation datasets: bifurcation diagrams of branches and two-parameter curves of special points."""
+
+from __future__ import annotations
+
+import matplotlib.pyplot as plt
+import numpy as np
+import xarray as xr
+
+from ..results import config_of
+from .registry import figure
+
+STYLE = {0: "-", 1: ":", 2: "--"}  # stability flag: stable solid, marginal dotted, unstable dashed
+UNITS = {"omega": "rad/s", "eps": "m/s", "mu": "-", "e": "m", "inertia": "-"}
+SYMBOL = {"omega": r"spin rate $\Omega$", "eps": r"smoothing $\varepsilon$", "mu": r"friction coefficient $\mu$",
+          "e": "eccentricity e", "inertia": "inertia scale"}
+
+
+def axis_label(name: str) -> str:
+    return f"{SYMBOL.get(name, name)} [{UNITS.get(name, '')}]"
+
+
+def _specials(ds: xr.Dataset):
+    return [(str(label), int(index)) for label, index in zip(ds["special_label"].values, ds["special_index"].values)]
+
+
+def _segments(x, y, flag):
+    """Runs of equal flag, each with the first point of the next run (so the curve is continuous)."""
+    start = 0
+    for i in range(1, len(x) + 1):
+        if i == len(x) or flag[i] != flag[start]:
+            yield x[start:i + (i < len(x))], y[start:i + (i < len(x))], int(flag[start])
+            start = i
+
+
+@figure("continuation")
+def continuation_figure(ds: xr.Dataset):
+    """A branch: max Re s and the eigenvalues' real parts against the parameter (stable solid, unstable dashed),
+    special points labelled. A curve: the two parameters, codimension-two points labelled."""
+    parameters = ds.attrs.get("parameters", "omega").split()
+    if len(parameters) == 2:
+        return curve_figure([ds])
+    name = parameters[0]
+    x = ds[name].values
+    fig, axes = plt.subplots(2, 1, figsize=(8, 7), sharex=True, constrained_layout=True)
+    ax = axes[0]
+    stability = ds["stability"].values.copy()
+    for i in np.flatnonzero(stability == 1)[::-1]:  # special points (marginal) take the style of the next run
+        stability[i] = stability[i + 1] if i + 1 < len(stability) else stability[i - 1]
+    for xs, ys, flag in _segments(x, ds["max_real_eig"].values, stability):
+        ax.plot(xs, ys, STYLE[flag], color="k", lw=1.4)
+    ax.axhline(0.0, color="0.6", lw=0.8)
+    ax.set_yscale("symlog", linthresh=0.1)
+    ax.set(ylabel=r"max Re $s$ [1/s]", title=f"{config_of(ds).get('branch', '')} branch: stable solid, "
+                                               "unstable dashed")
+    ax2 = axes[1]
+    for k in range(ds.sizes["eig"]):
+        ax2.plot(x, ds["eig_real"].values[:, k], ".", ms=2)
+    ax2.axhline(0.0, color="0.6", lw=0.8)
+    ax2.set_yscale("symlog", linthresh=0.1)
+    ax2.set(xlabel=axis_label(name), ylabel=r"Re $s_k$ [1/s]")
+    for k, (label, index) in enumerate(_specials(ds)):
+        for a, y in ((ax, ds["max_real_eig"].values[index]), (ax2, 0.0)):
+            a.plot(x[index], y, "o", color="tab:red", ms=5, zorder=3)
+        ax.annotate(label, (x[index], ds["max_real_eig"].values[index]), textcoords="offset points",
+                    xytext=(-14 if k % 2 else 4, 8 if k % 2 else -14), fontsize=8, color="tab:red")
+    fig.suptitle(_fixed_text(ds, parameters))
+    return fig
+
+
+def _fixed_text(ds: xr.Dataset, parameters) -> str:
+    fixed = [n for n in ("omega", "eps", "mu", "e", "inertia") if n not in parameters]
+    return "Continuation, " + ", ".join(f"{n} = {float(ds[n].values[0]):.4g}" for n in fixed)
+
+
+def curve_figure(curves: list, background=None, ax=None):
+    """Two-parameter curves (datasets of one parameter pair) with their codimension-two points; an optional
+    stability map (kind stability_map) in the background shows the growth rate of the branch."""
+    parameters = curves[0].attrs["parameters"].split()
+    own = ax is None
+    if own:
+        fig, ax = plt.subplots(figsize=(7.5, 5.5), constrained_layout=True)
+    else:
+        fig = ax.figure
+    if background is not None:
+        branch = config_of(curves[0]).get("branch", "inverted")
+        mre = background["max_real_eig"].sel(branch=branch).transpose("eps", "omega").values
+        ax.contourf(background["omega"], background["eps"], mre, levels=[-1e9, 0.0], colors=["#cfe3f5"])
+        ax.contour(background["omega"], background["eps"], mre, levels=[0.0], colors="0.5", linewidths=0.6)
+    for ds in curves:
+        x, y = ds[parameters[0]].values, ds[parameters[1]].values
+        kind = ds.attrs.get("critical", "")
+        hopf_part = ds["critical_product"].values > 0 if "critical_product" in ds else np.ones(len(x), bool)
+        color, labelled = None, False
+        for xs, ys, is_hopf in _segments(x, y, hopf_part):
+            label = None if (labelled or not is_hopf) else f"{kind} curve from {config_of(ds).get('source_label', '')}"
+            line = ax.plot(xs, ys, ("-" if kind == "hopf" else "--") if is_hopf else ":", lw=1.5 if is_hopf else 0.8,
+                           color=color, label=label)[0]
+            color, labelled = line.get_color(), labelled or label is not None
+        for label, index in _specials(ds):
+            ax.plot(x[index], y[index], "s", color="k", ms=5)
+            ax.annotate(label, (x[index], y[index]), textcoords="offset points", xytext=(5, 4), fontsize=8)
+    ax.set(xlabel=axis_label(parameters[0]), ylabel=axis_label(parameters[1]),
+           title="Hopf (solid), zero-eigenvalue (dashed), neutral saddle (dotted)" + (
+               "; shaded: stable" if background is not None else ""))
+    ax.legend(fontsize=8, loc="best")
+    if own:
+        finite = np.concatenate([np.c_[d[parameters[0]].values, d[parameters[1]].values] for d in curves])
+        ax.set_xlim(np.nanmin(finite[:, 0]) - 1, np.nanmax(finite[:, 0]) + 1)
+    return fig
