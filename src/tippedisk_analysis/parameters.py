@@ -302,5 +302,13 @@ class Setup:
 
 
 def to_dict(obj) -> dict:
-    """Nested plain dict of a parameter dataclass (for JSON attributes)."""
-    return dataclasses.asdict(obj)
+    """Nested plain dict of a parameter dataclass (for JSON attributes). A disk given by values has no
+    ``geometry`` key, so its configuration reads as before drilled disks were kept (stored datasets,
+    checkpoints and chunk directories stay comparable)."""
+    return _without_empty_geometry(dataclasses.asdict(obj))
+
+
+def _without_empty_geometry(d):
+    if isinstance(d, dict):
+        return {k: _without_empty_geometry(v) for k, v in d.items() if not (k == "geometry" and v is None)}
+    return d

@@ -134,6 +134,18 @@ def check_resources(sweep: Sweep, workers: int = 1) -> None:
         "use fewer grid points (smaller N), or split it into several outputs along one axis")
 
 
+def discard_other_configuration(sweep: Sweep, output) -> None:
+    """Remove ``output``'s chunk directory if it belongs to another configuration (``--overwrite`` for
+    fronts whose library call takes no ``overwrite``); chunks of this configuration are kept."""
+    d = chunk_dir(output)
+    try:
+        same = json.loads((d / "config.json").read_text()) == json.loads(json.dumps(sweep.config, sort_keys=True))
+    except (OSError, ValueError):
+        same = False
+    if d.is_dir() and not same:
+        shutil.rmtree(d, ignore_errors=True)
+
+
 def _write_config(d: Path, cfg: str) -> None:
     files.atomic_write(d / "config.json", lambda tmp: Path(tmp).write_text(cfg))
 

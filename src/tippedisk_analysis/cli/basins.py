@@ -15,7 +15,8 @@ import sys
 from .. import defaults
 from ..errors import ParameterError
 from ..ranges import parse_range
-from .common import finite_float, positive_int, writable
+from ..files import show
+from .common import add_output, finite_float, output_path, positive_int, scheduler_type
 from .registry import command
 
 INITIAL_HELP = {"omega": "initial spin Omega [rad/s] (Table 3: 40)", "beta0": "initial beta [rad] (pi/2)",
@@ -37,8 +38,9 @@ def _common(p) -> None:
     p.add_argument("--batch-size", type=positive_int, default=defaults.BATCH_SIZE,
                    help=f"SIMD lanes per batch: 1, 2, 4, 8, 16 (default {defaults.BATCH_SIZE})")
     p.add_argument("--threads", type=positive_int, help="threads without --scheduler (default: cores)")
-    p.add_argument("--scheduler", help="dask.distributed scheduler address, or local:N for a local cluster")
-    p.add_argument("--output", "-o", required=True, help="netCDF file (chunks go to OUTPUT.chunks/)")
+    p.add_argument("--scheduler", type=scheduler_type,
+                   help="dask.distributed scheduler address (tcp://host:8786), or local:N for N local processes")
+    add_output(p, "netCDF file (chunks go to OUTPUT.chunks/; the same command resumes them)")
 
 
 def _options(args) -> dict:
@@ -85,12 +87,16 @@ def basins(args) -> int:
             fixed[name] = start
         else:
             axes[name] = (start, stop, n)
-    output = writable(args.output)
+    output = output_path(args)
     cfg = bs.BasinConfig(axes=axes, initial=fixed, **_options(args))
     _estimate(cfg.n_points, True)
+    if args.overwrite:
+        from ..analysis.sweeps import discard_other_configuration
+
+        discard_other_configuration(bs.basin_sweep(cfg), output)
     ds = bs.basins(axes, initial=fixed, output=output, scheduler=args.scheduler, threads=args.threads,
                    **_options(args))
-    print(f"{output}: {ds.attrs['message']}")
+    print(f"{show(output)}: {ds.attrs['message']}")
     return 1 if ds.attrs["status"] != "completed" else 0
 
 
@@ -136,11 +142,15 @@ def basin_fractions(args) -> int:
     if not ranges:
         raise ParameterError("give at least one sampled range LOW:HIGH, e.g. --dgamma0 -3.1:3.1 --beta0 1.2:1.9")
     opts = _options(args)
-    output = writable(args.output)
+    output = output_path(args)
     cfg = bs.FractionsConfig(parameter=name, values=list(values), ranges=ranges, samples=args.samples, seed=args.seed,
                              initial=fixed, **opts)
     _estimate(cfg.n_points, True)
+    if args.overwrite:
+        from ..analysis.sweeps import discard_other_configuration
+
+        discard_other_configuration(bs.fractions_sweep(cfg), output)
     ds = bs.basin_fractions(name, values, ranges, samples=args.samples, seed=args.seed, initial=fixed, output=output,
                             scheduler=args.scheduler, threads=args.threads, **opts)
-    print(f"{output}: {ds.attrs['message']}")
+    print(f"{show(output)}: {ds.attrs['message']}")
     return 1 if ds.attrs["status"] != "completed" else 0

@@ -4,7 +4,7 @@ zero-eigenvalue points in two parameters."""
 from __future__ import annotations
 
 from ..errors import ParameterError
-from .common import add_output, finite_float, positive_int, writable
+from .common import add_output, finite_float, output_path, positive_int
 from .registry import command
 
 PARAMETER_HELP = "omega (spin rate), eps, mu, e (A, B, C about G fixed), inertia (scale of A, B, C)"
@@ -58,7 +58,7 @@ def continue_(args) -> int:
     from ..analysis import continuation, spin_continuation
     from ..parameters import Disk, Friction, Setup
 
-    output = writable(args.output)
+    output = output_path(args)
     friction = {k: v for k, v in (("eps", args.eps), ("mu", args.mu)) if v is not None}
     setup = Setup(disk=dataclasses.replace(Disk(), **({"e": args.e} if args.e is not None else {})),
                   friction=dataclasses.replace(Friction(), **friction))
