@@ -486,7 +486,9 @@ def summary(outcome, table: list, n: int, horizon: float) -> str:
     for i, d in enumerate(table):
         kinds[d.kind] = kinds.get(d.kind, 0) + int(np.sum(outcome == i))
     parts += [f"{c} {k}" for k, c in kinds.items()]
-    return ", ".join(parts) + f"; {len(table)} attractors"
+    n_transient = sum(d.kind in ("rolling", "wobbling") for d in table)
+    return ", ".join(parts) + (f"; table: {len(table) - n_transient} attractor(s) and {n_transient} transient "
+                               "state(s) (rolling, wobbling: energy still decreasing)")
 
 
 

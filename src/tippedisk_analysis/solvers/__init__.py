@@ -84,11 +84,11 @@ def simulate(model: str = "ode-euler", t_end: float = 5.0, *, setup: Setup | Non
     if not isinstance(initial, InitialState):
         raise ParameterError(f"initial must be an InitialState, not {type(initial).__name__}; give e.g. "
                              "InitialState(alpha_dot=40.0) (tippedisk_analysis.InitialState)")
-    if options.get("normalize_quaternion") and info.name not in moreau.MODELS:
+    if "normalize_quaternion" in options and info.name not in moreau.MODELS:
         raise ParameterError(f"normalize_quaternion applies to the Moreau quaternion models ({_quaternion_names()}); "
                              f"{info.name} has no quaternion drift to correct", cli=f"--normalize-quaternion applies to "
                              f"the Moreau quaternion models ({_quaternion_names()}); drop it for {info.name}")
-    if options.get("normalize_quaternion") and moreau.MODELS[info.name].parameterization != QUATERNION:
+    if "normalize_quaternion" in options and moreau.MODELS[info.name].parameterization != QUATERNION:
         raise ParameterError(f"normalize_quaternion applies to the Moreau quaternion models ({_quaternion_names()}); "
                              f"{info.name} uses Euler angles", cli=f"--normalize-quaternion applies to the Moreau "
                              f"quaternion models ({_quaternion_names()}); {info.name} uses Euler angles: drop it")
