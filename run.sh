@@ -10,7 +10,7 @@ if [ ! -x .venv/bin/python ]; then
 fi
 .venv/bin/python -m pip install --quiet --disable-pip-version-check -e ".[test]"
 case "${1:-demo}" in
-    demo) .venv/bin/python studies/fig13_ode_inversion.py output ;;
+    demo) .venv/bin/tippedisk study fig13_ode_inversion --output-dir output ;;
     test) shift; .venv/bin/python -m pytest "$@" ;;
     *) echo "usage: bash run.sh [demo|test [pytest args]]" >&2; exit 2 ;;
 esac
