@@ -78,3 +78,22 @@ def test_map_flags_falls_and_matches_single_runs(tmp_path):
                              on_chunk=seen.append)
     assert seen == [1]
     np.testing.assert_array_equal(again.max_exponent.values, ds.max_exponent.values)
+
+
+def test_cli_map_spectrum_and_bad_input(tmp_path, capsys):
+    from tippedisk_analysis.cli import main
+
+    out = tmp_path / "map.nc"
+    assert main(["lyapunov", "--omega", "20:40:2", "--eps", "0.1:0.25:2", "--t-end", "4", "-o", str(out)]) == 0
+    assert td.load(out).attrs["mode"] == "map" and main(["plot", str(out)]) == 0
+    out = tmp_path / "lorenz.nc"
+    assert main(["lyapunov", "--system", "lorenz", "--t-end", "50", "-o", str(out)]) == 0
+    assert td.load(out).sizes["exponent"] == 3 and main(["plot", str(out)]) == 0
+    capsys.readouterr()
+    bad = tmp_path / "bad.nc"
+    for args, fragment in ((["--omega", "10:40:3", "--eps", "0:0.2:3"], "eps must be positive"),
+                           (["--system", "duffing"], "knows lorenz"),
+                           (["--omega", "40", "--n-exponents", "8"], "n_exponents")):
+        assert main(["lyapunov", *args, "-o", str(bad)]) == 2
+        err = capsys.readouterr().err.strip()
+        assert fragment in err and len(err.splitlines()) == 1 and not bad.exists()

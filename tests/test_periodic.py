@@ -328,3 +328,41 @@ def inverted_branch_like():
     import xarray as xr
 
     return xr.Dataset(attrs={"kind": "continuation", "config": "{}"})
+
+
+# ----------------------------------------------------------------------------- CLI and figures
+
+
+def test_cli_textbook_branch_and_tippedisk_no_orbit(tmp_path, capsys, inverted_branch):
+    from tippedisk_analysis.cli import main
+
+    out = tmp_path / "bautin.nc"
+    assert main(["periodic-orbits", "--system", "bautin", "--to", "-0.3", "-o", str(out)]) == 0
+    ds = td.load(out)
+    assert ds.attrs["labels"] == "LP1" and "LP1 at beta = -0.25" in capsys.readouterr().out
+    assert main(["plot", str(out)]) == 0 and out.with_suffix(".png").stat().st_size > 10_000
+    source = tmp_path / "c.nc"
+    td.save(inverted_branch, source)
+    out = tmp_path / "hopf.nc"
+    code = main(["periodic-orbits", "--from-hopf", f"{source}:HOPF1", "--amplitudes", "0.001", "--max-iter", "3",
+                 "-o", str(out)])
+    assert code == 3 and td.load(out).attrs["status"] == "no_orbit"  # documented: no periodic orbit, dataset written
+    assert "no periodic orbit" in capsys.readouterr().out
+    assert main(["plot", str(out)]) == 0
+
+
+@pytest.mark.parametrize("args, fragment", [
+    ([], "exactly one of"),
+    (["--system", "bautin", "--from-run", "x.nc"], "exactly one of"),
+    (["--from-hopf", "nolabel"], "FILE:LABEL"),
+    (["--from-hopf", "missing.nc:HOPF1"], "does not exist"),
+    (["--system", "lorenz"], "unknown system"),
+    (["--system", "bautin", "--radius", "-1"], "radius"),
+])
+def test_cli_bad_input_exits_2_and_writes_nothing(tmp_path, capsys, args, fragment):
+    from tippedisk_analysis.cli import main
+
+    out = tmp_path / "po.nc"
+    assert main(["periodic-orbits", *args, "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert fragment in err and len(err.splitlines()) == 1 and not out.exists()

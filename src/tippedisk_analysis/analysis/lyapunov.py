@@ -181,28 +181,29 @@ def spectrum(system: OdeSystem, state, pars=None, *, n_exponents: int | None = N
                           float(ta.time), div_mean, np.array(ta.state[:n]))
 
 
-def spectrum_dataset(result: LyapunovResult, system: OdeSystem, config: dict) -> xr.Dataset:
+def spectrum_dataset(result: LyapunovResult, system: OdeSystem, config: dict, time_units: str = "s") -> xr.Dataset:
     """A run's spectrum as a dataset of kind ``lyapunov`` (dims exponent, history)."""
     import heyoka as hy
 
     k = len(result.exponents)
+    rate = "s-1" if time_units == "s" else f"1/({time_units})"
     data = {
-        "exponents": ("exponent", result.exponents, {"units": "s-1", "long_name": "Lyapunov exponents, descending"}),
+        "exponents": ("exponent", result.exponents, {"units": rate, "long_name": "Lyapunov exponents, descending"}),
         "history": (("history", "exponent"), result.history,
-                    {"units": "s-1", "long_name": "running estimates at each re-orthonormalisation"}),
+                    {"units": rate, "long_name": "running estimates at each re-orthonormalisation"}),
         "history_time": ("history", result.history_time,
-                         {"units": "s", "long_name": "time since the end of the transient"}),
-        "exponent_sum": ((), float(result.exponents.sum()), {"units": "s-1", "long_name": "sum of the exponents"}),
+                         {"units": time_units, "long_name": "time since the end of the transient"}),
+        "exponent_sum": ((), float(result.exponents.sum()), {"units": rate, "long_name": "sum of the exponents"}),
         "final_state": ("state", result.final_state, {"long_name": "state at the end of the run"}),
     }
     if math.isfinite(result.divergence_mean):
         data["divergence_mean"] = ((), result.divergence_mean, {
-            "units": "s-1", "long_name": "time average of div f = tr(df/dx) over the accumulation window (equals "
+            "units": rate, "long_name": "time average of div f = tr(df/dx) over the accumulation window (equals "
                                          "the sum of the full spectrum)"})
     coords = {"exponent": ("exponent", np.arange(k, dtype=np.int32), {"long_name": "exponent index"}),
               "state": ("state", np.array(system.state_names, dtype=str), {"long_name": "state variable"})}
     config = {"system": system.name, "heyoka_version": hy.__version__, **config}
-    message = (f"{result.message}; exponents " + ", ".join(f"{v:.6g}" for v in result.exponents) + " 1/s"
+    message = (f"{result.message}; exponents " + ", ".join(f"{v:.6g}" for v in result.exponents) + f" {rate}"
                + (f"; sum {result.exponents.sum():.6g}, mean divergence {result.divergence_mean:.6g}"
                   if math.isfinite(result.divergence_mean) else ""))
     attrs = make_attrs("lyapunov", config, result.status, message, mode="spectrum", system=system.name,
@@ -264,7 +265,7 @@ def textbook_spectrum(name: str, state, *, t_end: float = 1000.0, dt: float = 1.
     system = textbook_system(name)
     result = spectrum(system, state, system.with_pars(**pars), t_end=t_end, dt=dt, transient=transient, tol=tol)
     return spectrum_dataset(result, system, {"state0": list(map(float, state)), "t_end": t_end, "dt": dt,
-                                             "transient": transient, "tol": tol, "pars": pars})
+                                             "transient": transient, "tol": tol, "pars": pars}, "time unit")
 
 
 # ============================================================================ maps over (Omega, eps)

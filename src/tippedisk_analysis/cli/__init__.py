@@ -14,6 +14,8 @@ from ..errors import TippediskError
 from ..version import __version__
 from . import (bifurcation, continuation, outcome_map, plot, poincare, simulate, stability_map,  # noqa: F401
                study)  # registration
+from . import periodic_orbits  # noqa: F401  (registration)
+from . import lyapunov  # noqa: F401  (registration)
 from .registry import COMMANDS
 
 

@@ -13,6 +13,7 @@ import xarray as xr  # noqa: E402
 
 from ..errors import DatasetError  # noqa: E402
 from . import continuation, stability_map, trajectories  # noqa: E402, F401 (registration)
+from . import periodic  # noqa: E402, F401 (registration)
 from .registry import FIGURES  # noqa: E402
 from .simulation import comparison_figure, gap_figure, simulation_figure, stroboscopic_figure  # noqa: E402
 from .stability_map import stability_map_figure  # noqa: E402
