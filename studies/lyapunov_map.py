@@ -26,7 +26,8 @@ def main(output_dir: str = "output", quick: bool = False) -> Path:
     _store(run, out / "lyapunov_tippedisk_table3_eps0.25.nc")
     x = stationary.stationary_state("inverted", [31.63])[:, 0]
     real = np.sort(np.linalg.eigvals(reduced.jacobian(x, ode.parameter_vector(setup))[0]).real)[::-1]
-    equilibrium = ly.tippedisk_spectrum(setup, state=x, t_end=20.0 if quick else 400.0, transient=2.0 if quick else 20.0)
+    equilibrium = ly.tippedisk_spectrum(setup, state=x, t_end=20.0 if quick else 400.0,
+                                        transient=2.0 if quick else 20.0)
     _store(equilibrium, out / "lyapunov_tippedisk_inverted_spin.nc")
     print("inverted spin at Omega = 31.63 rad/s, eps = 0.25 m/s: exponents "
           + ", ".join(f"{v:.4f}" for v in equilibrium.exponents.values) + "; real parts of the eigenvalues "

@@ -655,7 +655,8 @@ def find_orbit(system: OdeSystem, state, period: float, pars=None, *, segments: 
     """A periodic orbit near (``state``, ``period``) by Newton's method; always returns a status.
 
     Gauss-Newton on the shooting equations with the phase condition fixed at the guess (least-squares
-    steps of at most MAX_NEWTON_STEP in scaled unknowns, halved while they increase the residual). Statuses: ``converged`` (a periodic orbit);
+    steps of at most MAX_NEWTON_STEP in scaled unknowns, halved while they increase the residual).
+    Statuses: ``converged`` (a periodic orbit);
     ``equilibrium`` (Newton converged, or was converging, to a point: amplitude below ``amplitude_tol``
     -- an equilibrium is a solution of the shooting equations for every T, never an orbit);
     ``not_converged`` (the message holds the residual of the last iterate); ``nonfinite``.
@@ -1219,8 +1220,10 @@ def orbits_dataset(orbits: list[PeriodicOrbit], status: str, message: str, confi
         data[orbits[0].parameter] = ("point", clean([o.value for o in orbits]),
                                      {"long_name": f"continuation parameter {orbits[0].parameter}"})
     if n_obs:
-        data["observable_min"] = (("point", "observable"), clean(obs.min(axis=1)), {"long_name": "minimum over the orbit"})
-        data["observable_max"] = (("point", "observable"), clean(obs.max(axis=1)), {"long_name": "maximum over the orbit"})
+        data["observable_min"] = (("point", "observable"), clean(obs.min(axis=1)),
+                                  {"long_name": "minimum over the orbit"})
+        data["observable_max"] = (("point", "observable"), clean(obs.max(axis=1)),
+                                  {"long_name": "maximum over the orbit"})
         data["orbit_observables"] = (("point", "sample", "observable"), clean(obs),
                                      {"long_name": "observables along the orbit"})
     if arclength is not None:
