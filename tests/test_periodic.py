@@ -366,3 +366,24 @@ def test_cli_bad_input_exits_2_and_writes_nothing(tmp_path, capsys, args, fragme
     assert main(["periodic-orbits", *args, "-o", str(out)]) == 2
     err = capsys.readouterr().err.strip()
     assert fragment in err and len(err.splitlines()) == 1 and not out.exists()
+
+
+def test_branch_continues_from_a_stored_orbit(tmp_path, capsys):
+    from tippedisk_analysis.cli import main
+
+    first = tmp_path / "b.nc"
+    assert main(["periodic-orbits", "--system", "bautin", "--to", "-0.3", "--segments", "2", "-o", str(first)]) == 0
+    ds = td.load(first)
+    orbit = po.orbit_from_dataset(ds, 3)
+    assert orbit.converged and len(orbit.states) == 2 and orbit.parameter == "beta"
+    assert orbit.period == pytest.approx(float(ds.period[3]), abs=1e-12)
+    out = tmp_path / "more.nc"  # from the small (unstable) cycle towards beta > 0: it shrinks into the Hopf point
+    assert main(["periodic-orbits", "--from-orbit", f"{first}:3", "--to", "0.1", "-o", str(out)]) == 0
+    assert td.load(out).attrs["labels"] == "HOPF1"
+    last = ds.sizes["point"] - 1  # from the large (stable) cycle: on to beta = 0.1
+    assert main(["periodic-orbits", "--from-orbit", f"{first}:{last}", "--to", "0.1", "-o", str(out)]) == 0
+    more = td.load(out)
+    assert float(more.beta[-1]) == pytest.approx(0.1) and (more.stability == 0).all()
+    capsys.readouterr()
+    assert main(["periodic-orbits", "--from-orbit", f"{first}:99", "-o", str(tmp_path / "x.nc")]) == 2
+    assert "does not exist" in capsys.readouterr().err

@@ -356,6 +356,7 @@ class ShootingProblem(continuation.Problem):
         self._tau = np.arange(self.samples) / self.samples  # integral phase condition: tau_j = j / N
         self._ref = None
         self._half_ref = np.zeros(n)
+        self._half_ref_norm = 0.0
         self.terminal = frozenset({"hopf"})
         self._memo: dict = {}
 
@@ -470,7 +471,8 @@ class ShootingProblem(continuation.Problem):
         ev = self._evaluate(u)
         if "error" in ev:
             return
-        self._half_ref = ev["half"] / (np.linalg.norm(ev["half"]) or 1.0)
+        self._half_ref_norm = float(np.linalg.norm(ev["half"]))
+        self._half_ref = ev["half"] / (self._half_ref_norm or 1.0)
         if self.phase == "poincare":
             self._ref = (ev["X"][0].copy(), ev["f0"].copy())
         else:
@@ -546,6 +548,9 @@ class ShootingProblem(continuation.Problem):
     def accept(self, kind: str, point, value: float, options) -> bool:
         if kind in ("period_doubling", "neimark_sacker", "branch_point"):
             return math.isfinite(value) and abs(value) <= max(MULTIPLIER_TOL, options.locate_tol)
+        if kind == "fold":  # at a Hopf end the parameter turns too (p - p_H ~ r^2): not a fold of cycles
+            ev = self._evaluate(point.u)
+            return "error" not in ev and float(np.linalg.norm(ev["half"])) > 1e-3 * self._half_ref_norm
         return True
 
     def describe(self, kind: str, u) -> dict:
@@ -992,6 +997,42 @@ def simulation_guess(system: OdeSystem, state, pars=None, *, index: int = 0, lev
                              f"{max_time:g} time units after the transient; choose another section or start")
     (ta, xa), (tb, _xb) = crossings
     return xa, tb - ta
+
+
+def orbit_from_dataset(ds: xr.Dataset, point: int, *, max_iter: int = NEWTON_MAX_ITER) -> PeriodicOrbit:
+    """The orbit stored at ``point`` of a dataset of kind ``periodic_orbits``, corrected by Newton (its system,
+    runtime parameters, first point, period, segments and phase condition come from the dataset)."""
+    from ..errors import DatasetError
+    from ..results import config_of
+
+    if ds.attrs.get("kind") != "periodic_orbits":
+        raise DatasetError(f"the dataset is of kind {ds.attrs.get('kind')!r}; give a file written by "
+                           "tippedisk periodic-orbits")
+    n_points = ds.sizes["point"]
+    if not -n_points <= point < n_points:
+        raise ParameterError(f"point {point} does not exist; the dataset has points 0 .. {n_points - 1}")
+    if int(ds.orbit_status.values[point]) != STATUS["converged"]:
+        status = list(STATUS)[int(ds.orbit_status.values[point])]
+        raise ParameterError(f"point {point} is not a periodic orbit (orbit_status {status}); give a converged point")
+    config = config_of(ds)
+    name = ds.attrs.get("system", "")
+    if name == "tippedisk_reduced":
+        system = tippedisk_system(_setup_from(config["setup"]))
+    else:
+        keys = [k for k in TEXTBOOK if textbook_system(k).name == name]
+        if not keys:
+            raise DatasetError(f"system {name!r} of the dataset is unknown to this version; give a dataset of one of "
+                               f"{', '.join(TEXTBOOK)}")
+        system = textbook_system(keys[0])
+    pars = ds.runtime_parameters.values[point]
+    orbit = find_orbit(system, ds.initial_state.values[point], float(ds.period.values[point]),
+                       np.concatenate([pars, np.asarray(system.pars)[len(pars):]]),
+                       segments=int(config.get("segments", 1)), phase=config.get("phase", "poincare"),
+                       max_iter=max_iter)
+    parameter = ds.attrs.get("parameter") or None
+    if parameter:
+        orbit.parameter, orbit.value = parameter, float(orbit.pars[system.parameter_index(parameter)])
+    return orbit
 
 
 # ============================================================================ branches
