@@ -125,7 +125,7 @@ def test_bad_guesses_are_one_line_errors():
     with pytest.raises(ParameterError, match="no parameter"):
         po.orbit_problem(po.find_orbit(system, [2.0, 0.0], 6.66), "nu")
     with pytest.raises(ParameterError, match="unknown system"):
-        po.textbook_system("duffing")
+        po.textbook_system("pendulum")
 
 
 # ----------------------------------------------------------------------------- from a Hopf point
@@ -387,3 +387,46 @@ def test_branch_continues_from_a_stored_orbit(tmp_path, capsys):
     capsys.readouterr()
     assert main(["periodic-orbits", "--from-orbit", f"{first}:99", "-o", str(tmp_path / "x.nc")]) == 2
     assert "does not exist" in capsys.readouterr().err
+
+
+# ----------------------------------------------------------------------------- conservative systems
+
+
+def test_conservative_family_in_the_energy_level_matches_quadrature():
+    """Duffing x'' + x + x^3 = 0: orbits come in a family (two trivial multipliers); pinning the energy makes
+    the shooting system consistent and overdetermined; the period along the family equals the quadrature."""
+    system = po.textbook_system("duffing")
+    orbit = po.find_orbit(system, [1.0, 0.0], 5.0)
+    assert orbit.converged and orbit.trivial.sum() == 2 and orbit.stability == po.STABILITY["marginal"]
+
+    def period(E):
+        a2 = -1 + math.sqrt(1 + 4 * E)
+        return 4 * quad(lambda x: 1 / math.sqrt(2 * (math.sqrt(a2) + x) * (0.5 + (a2 + x * x) / 4)), 0,
+                        math.sqrt(a2), weight="alg", wvar=(0, -0.5))[0]
+
+    br, prob = po.continue_orbits(orbit, "E", bounds={"E": (0.1, 3.0)}, both_ways=True,
+                                  options=co.Options(ds=0.05, ds_max=0.2, max_points=30))
+    assert br.status == "completed" and not br.special_points
+    for p in br.points[::3]:
+        assert p.u[-2] == pytest.approx(period(p.u[-1]), rel=1e-12)
+
+
+def test_frictionless_tippedisk_orbit_checked_with_ode_model_1():
+    """mu = 0: the only periodic orbits of the tippedisk (Lyapunov centre family at a saddle-centre spin)."""
+    setup = td.Setup(friction=td.Friction(mu=0.0))
+    orbit = po.tippedisk_lyapunov_orbit(setup, "inverted", 40.0, radius=1e-3)
+    assert orbit.converged and orbit.trivial.sum() == 3  # flow, energy, vertical angular momentum
+    mu = orbit.multipliers[~orbit.trivial]
+    saddle = np.sort(np.abs(mu[np.abs(mu.imag) < 1e-9]))
+    assert saddle[0] * saddle[1] == pytest.approx(1.0, rel=1e-8)  # a reciprocal pair: conservative
+    pair = mu[np.abs(mu.imag) > 1e-9]
+    assert np.abs(np.abs(pair) - 1).max() < 1e-8  # S's horizontal velocity turning: on the unit circle
+    check = po.tippedisk_full_model_check(orbit, setup)
+    assert check["return_error"] < 1e-8  # ODE Model 1 (13 states) closes the orbit
+    assert check["section_period"] == pytest.approx(orbit.period, abs=1e-9)  # Poincare return time (events)
+    br, prob = po.tippedisk_lyapunov_family(setup, "inverted", 40.0, energy_max=0.41,
+                                            options=co.Options(ds=0.05, ds_max=0.2, max_points=8))
+    levels = [po.integral_levels(prob.system, prob.split(p.u)[0][0]) for p in br.points]
+    assert np.ptp([lv["L_z"] for lv in levels]) < 1e-12 and np.all(np.diff([lv["E_tot"] for lv in levels]) > 0)
+    with pytest.raises(ParameterError, match="without friction"):
+        po.tippedisk_lyapunov_orbit(td.Setup(), "inverted", 40.0)

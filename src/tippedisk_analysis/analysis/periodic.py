@@ -92,7 +92,9 @@ class OdeSystem:
     continuation metric); n_trivial: trivial Floquet multipliers (1 + the number of independent first
     integrals or families of solutions); compact_mode: heyoka's compact mode for the variational
     integrator (large systems: compiles in seconds instead of minutes); observables: (name, units,
-    expression) whose min/max over an orbit are stored as amplitude measures.
+    expression) whose min/max over an orbit are stored as amplitude measures; integrals: (name, expression)
+    first integrals (a conservative system's orbits come in families: the shooting problem pins their levels
+    at x_0, a consistent overdetermined system that Gauss-Newton solves, and may continue in a level).
     """
 
     name: str
@@ -106,6 +108,7 @@ class OdeSystem:
     compact_mode: bool = False
     observables: tuple = ()
     description: str = ""
+    integrals: tuple = ()  # (name, expression): first integrals; their levels are pinned (families of orbits)
 
     @property
     def n(self) -> int:
@@ -311,7 +314,7 @@ def classify(multipliers: np.ndarray, trivial: np.ndarray, tol: float = MULTIPLI
     n_unstable = int(np.sum(mod > 1 + tol))
     if n_unstable:
         return STABILITY["unstable"], n_unstable
-    return (STABILITY["stable"] if np.all(mod < 1 - tol) else STABILITY["marginal"]), 0
+    return (STABILITY["stable"] if mod.size and np.all(mod < 1 - tol) else STABILITY["marginal"]), 0
 
 
 # ============================================================================ the shooting problem
@@ -327,7 +330,8 @@ class ShootingProblem(continuation.Problem):
 
     def __init__(self, system: OdeSystem, pars=None, *, segments: int = 1, phase: str = "poincare",
                  parameter: str | None = None, parameter_scale: float = 1.0, period_scale: float = 1.0,
-                 bounds: dict | None = None, shift=None, tol: float = TAYLOR_TOL, samples: int = N_SAMPLES):
+                 bounds: dict | None = None, shift=None, tol: float = TAYLOR_TOL, samples: int = N_SAMPLES,
+                 levels: dict | None = None):
         if int(segments) != segments or segments < 1:
             raise ParameterError(f"segments = {segments!r}; give a positive integer")
         if phase not in ("poincare", "integral"):
@@ -337,8 +341,16 @@ class ShootingProblem(continuation.Problem):
         self.system, self.m, self.phase, self.samples = system, int(segments), phase, int(samples)
         self.n = n = system.n
         self.pars = np.array(system.pars if pars is None else pars, dtype=float)
-        self.p_index = None if parameter is None else system.parameter_index(parameter)
+        self.integral_names = tuple(name for name, _e in system.integrals)
+        self.level_parameter = parameter if parameter in self.integral_names else None
+        self.p_index = None if parameter is None or self.level_parameter else system.parameter_index(parameter)
         self.parameter = parameter
+        self.levels = dict(levels or {})
+        missing = [name for name in self.integral_names if name not in self.levels and name != self.level_parameter]
+        if missing:
+            raise ParameterError(f"{system.name} has first integrals: give the levels of {', '.join(missing)} "
+                                 "(find_orbit takes them from the guess)")
+        self._integrals = _integrals_field(system) if system.integrals else None
         self.flow = Flow(system, tol, () if self.p_index is None else (self.p_index,))
         self.shift = np.zeros(n) if shift is None else np.asarray(shift, dtype=float)
         self.names = tuple(f"{s}[{k}]" for k in range(self.m) for s in system.state_names) + (
@@ -368,14 +380,31 @@ class ShootingProblem(continuation.Problem):
 
     def runtime(self, u) -> np.ndarray:
         pars = self.pars.copy()
-        if self.parameter:
+        if self.p_index is not None:
             pars[self.p_index] = u[self.t_index + 1]
         return pars
+
+    def _level_rows(self, u, X0) -> tuple[np.ndarray, np.ndarray]:
+        """I_j(x_0) - c_j and their gradients (rows of the Jacobian) for the first integrals."""
+        k = len(self.integral_names)
+        if not k:
+            return np.empty(0), np.empty((0, len(u)))
+        pars = self.runtime(u)
+        values = self._integrals.values(X0, pars)
+        grads = self._integrals.tensor(X0, pars, 1, with_parameters=False)
+        rows = np.zeros((k, len(u)))
+        rows[:, : self.n] = grads
+        target = np.array([self.levels.get(name, math.nan) for name in self.integral_names])
+        if self.level_parameter:
+            j = self.integral_names.index(self.level_parameter)
+            target[j] = u[self.t_index + 1]
+            rows[j, self.t_index + 1] = -1.0
+        return values - target, rows
 
     def unknowns(self, state, period: float, value: float | None = None) -> np.ndarray:
         """u from one point of the orbit and its period (segment points by integration)."""
         pars = self.pars.copy()
-        if self.parameter:
+        if self.p_index is not None:
             if value is None:
                 value = pars[self.p_index]
             pars[self.p_index] = value
@@ -421,7 +450,7 @@ class ShootingProblem(continuation.Problem):
             j = (k + 1) % m
             A[rows, j * n:(j + 1) * n] -= np.eye(n)
             A[rows, self.t_index] = self.flow.rhs(ends[k], pars) / m
-            if self.parameter:
+            if self.p_index is not None:
                 A[rows, self.t_index + 1] = Phips[k][:, 0]
         M = np.eye(n)
         for Phi in Phis:
@@ -463,7 +492,7 @@ class ShootingProblem(continuation.Problem):
             local = self._tau[k * per:(k + 1) * per] - k / self.m
             fx = self.flow.rhs(xs.T, ev["pars"]).T
             row[self.t_index] += w * np.sum(np.sum(fr * fx, axis=1) * local)
-            if self.parameter:
+            if self.p_index is not None:
                 row[self.t_index + 1] += w * np.einsum("ji,jik->k", fr, Phips)[0]
         return value, row
 
@@ -482,14 +511,14 @@ class ShootingProblem(continuation.Problem):
     def residual(self, u) -> np.ndarray:
         ev = self._evaluate(u)
         if "error" in ev:
-            return np.full(self.n * self.m + 1, np.nan)
-        return np.append(ev["F"], self._phase_row(ev, u)[0])
+            return np.full(self.n * self.m + 1 + len(self.integral_names), np.nan)
+        return np.concatenate([ev["F"], [self._phase_row(ev, u)[0]], self._level_rows(u, ev["X"][0])[0]])
 
     def jacobian(self, u) -> np.ndarray:
         ev = self._evaluate(u)
         if "error" in ev:
-            return np.full((self.n * self.m + 1, len(u)), np.nan)
-        return np.vstack([ev["A"], self._phase_row(ev, u)[1]])
+            return np.full((self.n * self.m + 1 + len(self.integral_names), len(u)), np.nan)
+        return np.vstack([ev["A"], self._phase_row(ev, u)[1], self._level_rows(u, ev["X"][0])[1]])
 
     def monodromy(self, u) -> np.ndarray:
         ev = self._evaluate(u)
@@ -518,9 +547,12 @@ class ShootingProblem(continuation.Problem):
     def tests(self, point) -> dict:
         mu = self._nontrivial(point.eigenvalues)
         i, j = np.triu_indices(len(mu), 1)
-        return {"fold": float(point.tangent[self.parameters[0]]), "branch_point": _signed_product(mu - 1.0),
-                "period_doubling": _signed_product(mu + 1.0), "neimark_sacker": _signed_product(mu[i] * mu[j] - 1.0),
-                "hopf": self._signed_amplitude(point.u)}
+        tests = {"fold": float(point.tangent[self.parameters[0]]), "branch_point": _signed_product(mu - 1.0),
+                 "period_doubling": _signed_product(mu + 1.0), "neimark_sacker": _signed_product(mu[i] * mu[j] - 1.0),
+                 "hopf": self._signed_amplitude(point.u)}
+        if self.integral_names:  # conservative: pairs on the unit circle are generic (elliptic), not a bifurcation
+            del tests["neimark_sacker"]
+        return tests
 
     def _signed_amplitude(self, u) -> float:
         """(x_0 - x(T/2)) / scale along the reference orbit's: changes sign where the branch passes through a
@@ -587,7 +619,8 @@ class ShootingProblem(continuation.Problem):
         times = T * np.arange(n_samples) / n_samples
         samples = self.flow.trajectory(X[0], times, pars)
         if residual is None:
-            residual = float(np.max(np.abs(self.residual(u)[:-1]) / np.tile(self.system.state_scale, self.m)))
+            residual = float(np.max(np.abs(self.residual(u)[: self.n * self.m]) / np.tile(self.system.state_scale,
+                                                                                        self.m)))
         return PeriodicOrbit(status, message, self.system, pars, X.copy(), T, p, self.parameter, residual, iterations,
                              mu, trivial, times, samples, self.flow.observables(samples.T, pars).T
                              if self.system.observables else np.empty((n_samples, 0)))
@@ -671,8 +704,9 @@ def find_orbit(system: OdeSystem, state, period: float, pars=None, *, segments: 
     state = np.asarray(state, dtype=float)
     if state.shape != (system.n,) or not np.all(np.isfinite(state)):
         raise ParameterError(f"the state guess must be {system.n} finite numbers ({', '.join(system.state_names)})")
+    levels = integral_levels(system, state, pars) if system.integrals else None
     prob = ShootingProblem(system, pars, segments=segments, phase=phase, period_scale=float(period), shift=shift,
-                           tol=tol)
+                           tol=tol, levels=levels)
     scale = prob.scale
     try:
         u = prob.unknowns(state, float(period))
@@ -706,7 +740,7 @@ def find_orbit(system: OdeSystem, state, period: float, pars=None, *, segments: 
             if np.all(np.abs(F) <= 1e-9 * (1.0 + np.abs(A) @ np.abs(u))):
                 status = "converged"
             break
-    residual = float(np.max(np.abs(F[:-1]) / np.tile(system.state_scale, prob.m)))
+    residual = float(np.max(np.abs(F[: system.n * prob.m]) / np.tile(system.state_scale, prob.m)))
     try:
         orbit = prob.orbit(u, status, "", residual, it)
     except FlowError as exc:
@@ -731,6 +765,20 @@ def _stability_text(orbit: PeriodicOrbit) -> str:
     word = {0: "stable", 1: "marginal", 2: f"unstable ({n_unstable} multiplier(s) outside the unit circle)"}[flag]
     big = orbit.multipliers[~orbit.trivial]
     return f"{word}, largest nontrivial |multiplier| {np.abs(big).max(initial=0.0):.6g}"
+
+
+def _integrals_field(system: OdeSystem) -> CompiledField:
+    return _cached((system.name, "integrals"), lambda: CompiledField([e for _n, e in system.integrals],
+                                                                      system.variables))
+
+
+def integral_levels(system: OdeSystem, state, pars=None) -> dict:
+    """The first integrals' values at ``state`` ({name: value})."""
+    if not system.integrals:
+        return {}
+    pars = np.array(system.pars if pars is None else pars, dtype=float)
+    values = _integrals_field(system).values(np.asarray(state, dtype=float), pars)
+    return dict(zip((name for name, _e in system.integrals), map(float, values)))
 
 
 def _failed(prob: ShootingProblem, state, period, status, message) -> PeriodicOrbit:
@@ -854,6 +902,18 @@ def _homoclinic() -> OdeSystem:
                      (1.0, 1.0), description="Hamiltonian loop with energy-selecting damping: homoclinic at c = 0")
 
 
+def _duffing() -> OdeSystem:
+    """The conservative Duffing oscillator x'' + x + k x^3 = 0: energy E = v^2/2 + x^2/2 + k x^4/4, a family of
+    periodic orbits parametrised by E (period by quadrature), two trivial multipliers (flow and energy)."""
+    import heyoka as hy
+
+    x, v = hy.make_vars("x", "v")
+    k = hy.par[0]
+    return OdeSystem("duffing", ("x", "v"), (x, v), (v, -x - k * x * x * x), (1.0,), ("k",), (1.0, 1.0),
+                     n_trivial=2, integrals=(("E", v * v / 2 + x * x / 2 + k * x ** 4 / 4),),
+                     description="conservative Duffing oscillator: a family of orbits in the energy")
+
+
 def _lorenz() -> OdeSystem:
     import heyoka as hy
 
@@ -877,6 +937,8 @@ TEXTBOOK = {
                       "Neimark-Sacker at beta = 0, angle 2 pi sqrt(2) mod 2 pi"),
     "homoclinic": Textbook(_homoclinic, "c", {"hopf": (-1.0 / 6.0, (1.0, 0.0))},
                            "Hopf at c = -1/6, homoclinic loop at c = 0 (saddle eigenvalues +-1)"),
+    "duffing": Textbook(_duffing, "E", {"orbit": (0.5, (1.0, 0.0), 5.0)},
+                        "conservative: orbits in a family parametrised by the energy E (a level of a first integral)"),
     "lorenz": Textbook(_lorenz, "rho", {}, "sigma 10, rho 28, beta 8/3: Lyapunov exponents 0.9056, 0, -14.5723"),
 }
 
@@ -1045,15 +1107,18 @@ def orbit_problem(orbit: PeriodicOrbit, parameter: str, *, parameter_scale: floa
     if not orbit.converged:
         raise ParameterError(f"the start is not a periodic orbit (status {orbit.status}): {orbit.message}")
     system = orbit.system
-    k = system.parameter_index(parameter)
+    k = None if parameter in dict(system.integrals) else system.parameter_index(parameter)
     bounds = dict(bounds or {})
     if period_max is not None:
         bounds["T"] = (0.0, float(period_max))
     m = segments or len(orbit.states)
+    levels = integral_levels(system, orbit.states[0], orbit.pars)
+    value = levels[parameter] if k is None else orbit.pars[k]
     prob = ShootingProblem(system, orbit.pars, segments=m, phase=phase, parameter=parameter,
-                           parameter_scale=parameter_scale, period_scale=orbit.period, bounds=bounds, tol=tol)
-    u0 = (np.concatenate([orbit.states.ravel(), [orbit.period, orbit.pars[k]]]) if m == len(orbit.states)
-          else prob.unknowns(orbit.states[0], orbit.period, orbit.pars[k]))
+                           parameter_scale=parameter_scale, period_scale=orbit.period, bounds=bounds, tol=tol,
+                           levels=levels)
+    u0 = (np.concatenate([orbit.states.ravel(), [orbit.period, value]]) if m == len(orbit.states)
+          else prob.unknowns(orbit.states[0], orbit.period, value))
     return prob, u0
 
 
@@ -1139,7 +1204,7 @@ def switch_period_doubling(prob: ShootingProblem, br: continuation.Branch, label
                              bounds={("T" if i == prob.t_index else prob.parameter):
                                      ((2 * lo, 2 * hi) if i == prob.t_index else (lo, hi))
                                      for i, (lo, hi) in prob.bounds.items()}, tol=prob.flow.tol,
-                             samples=2 * prob.samples)
+                             samples=2 * prob.samples, levels=prob.levels)
     vk = [v]
     for k in range(m - 1):
         vk.append(_segment_phi(prob, u, k) @ vk[-1])
@@ -1354,15 +1419,38 @@ def _tippedisk_expressions():
 
 def tippedisk_system(setup=None) -> OdeSystem:
     """The reduced tippedisk (7 states, :mod:`.reduced`) as an :class:`OdeSystem` at ``setup``'s parameters.
-    Two trivial Floquet multipliers: the flow direction and the spin family."""
+
+    With friction: two trivial Floquet multipliers, the flow direction and the spin family. Without friction
+    (mu = 0) the disk is conservative: the first integrals E_tot and L_z (the vertical angular momentum about
+    S: the contact force is vertical, so it has no moment about the vertical through S) are pinned, and the
+    trivial multipliers are three (flow, energy, angular momentum)."""
     from ..models import ode
     from . import reduced
 
     red, observables = _tippedisk_expressions()
+    pars = ode.parameter_vector(setup)
+    conservative = pars[ode.PARAMETER_NAMES.index("mu")] == 0.0
+    integrals = tuple((name, expr) for name, _u, expr in observables if name == "E_tot") + (
+        ("L_z", _vertical_angular_momentum(red)),) if conservative else ()
     return OdeSystem("tippedisk_reduced", reduced.STATE_NAMES, tuple(red.variables), tuple(red.rhs),
-                     tuple(ode.parameter_vector(setup)), ode.PARAMETER_NAMES, TIPPEDISK_SCALE, n_trivial=2,
-                     compact_mode=True, observables=observables,
-                     description="reduced tippedisk, ODE Model 1 (smooth Coulomb friction, bilateral contact)")
+                     tuple(pars), ode.PARAMETER_NAMES, TIPPEDISK_SCALE, n_trivial=3 if conservative else 2,
+                     compact_mode=True, observables=observables, integrals=integrals,
+                     description="reduced tippedisk, ODE Model 1 (" + ("frictionless: conservative" if conservative
+                                 else "smooth Coulomb friction") + ", bilateral contact)")
+
+
+def _vertical_angular_momentum(red):
+    """e_z^I . Theta_S omega: e_z^I in body components (sin g sin b, cos g sin b, cos b) ((3.1): G_from_I then
+    B_from_G), Theta_S = diag(A, B - m e^2, C - m e^2) (about S)."""
+    import heyoka as hy
+
+    from ..models import ode
+
+    beta, gamma, _ux, _uy, w_x, w_y, w_z = red.variables
+    m, e = ode.P["m"], ode.P["e"]
+    sb = hy.sin(beta)
+    return (ode.P["A"] * w_x * hy.sin(gamma) * sb + (ode.P["B"] - m * e * e) * w_y * hy.cos(gamma) * sb
+            + (ode.P["C"] - m * e * e) * w_z * hy.cos(beta))
 
 
 def _setup_from(config_setup: dict):
@@ -1528,4 +1616,116 @@ def tippedisk_orbits_from_run(run: xr.Dataset, *, crossing: int = -2, section: s
            "setup": _to_dict(setup), "model_used": "ode-euler"}
     ds = orbits_dataset([orbit], status, message, cfg, extra=extra)
     ds = ds.assign_coords(crossing=("crossing", np.arange(n, dtype=np.int32), {"long_name": "crossing index"}))
+    return ds
+
+
+# ============================================================================ the frictionless tippedisk
+#
+# With mu = 0 the disk is conservative (energy and the vertical angular momentum about S are first
+# integrals) and its spinning equilibria are saddle-centres: near each, the Lyapunov centre theorem gives a
+# family of periodic orbits for the elliptic pair (the other imaginary pair, +-i Omega, is the turning of
+# S's horizontal velocity in the rotating frame). These are the only periodic orbits of the tippedisk here.
+
+
+def tippedisk_lyapunov_orbit(setup, branch: str = "inverted", omega: float = 40.0, radius: float = 1e-3, *,
+                             max_iter: int = NEWTON_MAX_ITER) -> PeriodicOrbit:
+    """A periodic orbit of the frictionless reduced tippedisk (mu = 0) near the spinning equilibrium of
+    ``branch`` at spin rate ``omega``: guess x* + 2 r Re(q) on the elliptic eigenpair (q unit in scaled
+    states), period 2 pi / frequency, the levels of E_tot and L_z pinned at the guess's."""
+    from . import reduced
+    from . import stationary as st
+
+    system = tippedisk_system(setup)
+    if not system.integrals:
+        raise ParameterError("periodic orbits of the tippedisk exist without friction only: give mu = 0 (with "
+                             "mu > 0 the energy decreases wherever the disk slips, docs/periodic_orbits.md)")
+    x = st.stationary_state(branch, [omega])[:, 0]
+    scale = np.asarray(TIPPEDISK_SCALE)
+    vals, vecs = np.linalg.eig(reduced.jacobian(x, np.asarray(system.pars))[0])
+    elliptic = [i for i in range(len(vals)) if vals[i].imag > 1e-6 * abs(omega)
+                and abs(vals[i].real) < 1e-8 * abs(vals[i]) and abs(vals[i].imag - abs(omega)) > 1e-6 * abs(omega)]
+    if not elliptic:
+        raise ParameterError(f"the {branch} equilibrium at Omega = {omega:g} rad/s has no elliptic eigenpair besides "
+                             f"+-i Omega (eigenvalues {np.round(vals, 4)}); choose another spin rate")
+    k = elliptic[0]
+    q = vecs[:, k] / np.linalg.norm(vecs[:, k] / scale)
+    return find_orbit(system, x + 2 * (radius * q).real, 2 * math.pi / vals[k].imag, max_iter=max_iter)
+
+
+def tippedisk_full_model_check(orbit: PeriodicOrbit, setup, *, tol: float = TAYLOR_TOL,
+                               section: str = "beta_dot=0") -> dict:
+    """An orbit of the reduced tippedisk checked with ODE Model 1 (13 states): the lifted initial state
+    (:func:`.reduced.full_from_reduced`) integrated over one period returns to the orbit (``return_error``:
+    max |x(T) - x_0| / scale of the reduced states), and the period equals the return time of the section
+    crossings located by :mod:`.poincare`'s event integrator (``section_period``)."""
+    import copy as _copy
+
+    import heyoka as hy
+
+    from ..defaults import FALL_ANGLE, SLIP_SMOOTHING
+    from ..models import ode
+    from ..solvers import taylor
+    from . import poincare, reduced
+
+    x0 = orbit.states[0]
+    full0 = reduced.full_from_reduced(x0, setup.disk.r)
+    tr = taylor.integrate("ode-euler", setup, full0, orbit.period, orbit.period, tol, FALL_ANGLE, SLIP_SMOOTHING)
+    names = ode.EULER.state_names
+    end = {name: tr.states[-1, names.index(name)] for name in names}
+    x1 = reduced.reduced_from_full(end["alpha"], end["beta"], end["gamma"], end["x_dot"], end["y_dot"],
+                                   end["omega_x"], end["omega_y"], end["omega_z"])[:, 0]
+    error = float(np.max(np.abs(x1 - x0) / np.asarray(TIPPEDISK_SCALE)))
+    sec = poincare.parse_section(section)
+    si = poincare.section_integrator("ode-euler", sec.quantity, sec.modulo, sec.direction, float(tol))
+    ta = _copy.copy(si.integrator)
+    pars = np.append(ode.parameter_vector(setup), sec.level)
+    ta.pars[:] = pars
+    ta.time = 0.0
+    ta.state[:] = full0
+    ta.reset_cooldowns()
+    rec = ta.nt_events[0].callback
+    rec.t_transient, rec.level, rec.modulo, rec.times, rec.states = 0.0, sec.level, sec.modulo, [], []
+    ta.propagate_until(2.5 * orbit.period)
+    times = np.array(rec.times)
+    if ta.time < 2.5 * orbit.period or len(times) < 2:
+        raise ParameterError(f"the orbit crosses {section} fewer than twice in 2.5 periods; choose another section")
+    return {"return_error": error, "section_period": float(times[1] - times[0]), "section_times": times,
+            "period": orbit.period, "outcome": str(hy.taylor_outcome.time_limit)}
+
+
+def tippedisk_lyapunov_family(setup, branch: str = "inverted", omega: float = 40.0, energy_max: float | None = None,
+                              *, radius: float = 1e-3, options: continuation.Options | None = None):
+    """The family of periodic orbits of the frictionless tippedisk born at the spinning equilibrium (Lyapunov
+    centre theorem), continued in the energy level E_tot away from the equilibrium (towards the equilibrium
+    the shooting system becomes singular at the centre: start close to it instead) at fixed L_z.
+    Returns (Branch, ShootingProblem)."""
+    orbit = tippedisk_lyapunov_orbit(setup, branch, omega, radius)
+    if not orbit.converged:
+        raise ParameterError(f"no start orbit: {orbit.message}")
+    e0 = integral_levels(orbit.system, orbit.states[0], orbit.pars)["E_tot"]
+    e1 = e0 + 0.1 if energy_max is None else float(energy_max)
+    if not e1 > e0:
+        raise ParameterError(f"energy_max = {e1:g} J must exceed the start orbit's energy {e0:.6g} J")
+    br, prob = continue_orbits(orbit, "E_tot", bounds={"E_tot": (e0 - 1e-3 * abs(e0), e1)}, direction=1,
+                               parameter_scale=0.01,
+                               options=options or continuation.Options(ds=0.02, ds_max=0.1, max_points=200))
+    return br, prob
+
+
+def tippedisk_branch_dataset(prob: ShootingProblem, br: continuation.Branch, info: dict | None = None) -> xr.Dataset:
+    """:func:`branch_dataset` of a tippedisk branch with ``valid`` per orbit: lambda_N > 0 all along it (the
+    bilateral contact model holds); orbits with lambda_N < 0 somewhere would lift off."""
+    ds = branch_dataset(prob, br, info)
+    lam = ds.observable_min.sel(observable="lambda_N").values
+    valid = (lam > 0).astype(np.int8)
+    ds["valid"] = ("point", valid, {"long_name": "1: lambda_N > 0 along the whole orbit (bilateral contact holds)",
+                                    "flag_values": np.array([0, 1], np.int8), "flag_meanings": "lift_off valid"})
+    name = prob.parameter
+    if valid.all():
+        ds.attrs["message"] += "; lambda_N > 0 on every orbit"
+    else:
+        first = int(np.argmin(valid))
+        ds.attrs["message"] += (f"; lambda_N < 0 on the orbits from {name} = {float(ds[name][first]):.6g} on (min "
+                                f"{lam.min():.3g} N): the contact would lift off there, outside the bilateral model "
+                                "(see valid)")
     return ds

@@ -26,6 +26,9 @@ def _arguments(p) -> None:
     source.add_argument("--system", help="a textbook system: vanderpol, hopf, bautin, roessler, torus, homoclinic")
     source.add_argument("--from-orbit", metavar="FILE:POINT", help="an orbit of a periodic_orbits dataset, e.g. "
                                                                     "b.nc:5 (corrected, then continued with --to)")
+    source.add_argument("--frictionless", metavar="BRANCH:OMEGA", help="the tippedisk without friction (mu = 0): "
+                        "the family of orbits born at a spinning equilibrium, e.g. inverted:40, continued in the "
+                        "energy to --to E_MAX [J] (default E + 0.1 J)")
     tip = p.add_argument_group("tippedisk options")
     tip.add_argument("--amplitudes", default="0.001,0.01,0.05",
                      help="--from-hopf: guess radii r of x_H + 2 r Re(q) (default 0.001,0.01,0.05)")
@@ -50,10 +53,10 @@ def periodic_orbits(args) -> int:
     from .. import results
     from ..analysis import periodic as po
 
-    starts = [s for s in (args.from_hopf, args.from_run, args.system, args.from_orbit) if s]
+    starts = [s for s in (args.from_hopf, args.from_run, args.system, args.from_orbit, args.frictionless) if s]
     if len(starts) != 1:
         raise ParameterError("give exactly one of --from-hopf FILE:LABEL, --from-run FILE, --system NAME, "
-                             "--from-orbit FILE:POINT")
+                             "--from-orbit FILE:POINT, --frictionless BRANCH:OMEGA")
     output = writable(args.output)
     if args.from_hopf:
         path, _, label = args.from_hopf.rpartition(":")
@@ -79,6 +82,8 @@ def periodic_orbits(args) -> int:
         orbit = po.orbit_from_dataset(source, index, max_iter=args.max_iter)
         parameter = args.parameter or source.attrs.get("parameter") or ""
         ds = _orbit_or_branch(args, po, orbit, parameter, {"source": "dataset", "file": path, "point": index})
+    elif args.frictionless:
+        ds = _frictionless(args, po)
     else:
         ds = _textbook(args, po)
     results.save(ds, output)
@@ -86,6 +91,23 @@ def periodic_orbits(args) -> int:
     if ds.attrs["status"] == "no_orbit":
         return EXIT_NO_ORBIT
     return 0 if ds.attrs["status"] == "completed" else 1
+
+
+def _frictionless(args, po):
+    from ..analysis import continuation
+    from ..parameters import Friction, Setup
+
+    branch, _, omega = args.frictionless.partition(":")
+    try:
+        omega = float(omega)
+    except ValueError:
+        raise ParameterError(f"--frictionless {args.frictionless!r} is not BRANCH:OMEGA; give e.g. inverted:40") from None
+    setup = Setup(friction=Friction(mu=0.0))
+    br, prob = po.tippedisk_lyapunov_family(setup, branch, omega, args.to, radius=args.radius if args.radius != 0.05
+                                            else 1e-3, options=continuation.Options(ds=0.02, ds_max=0.1,
+                                                                                    max_points=args.max_points))
+    return po.tippedisk_branch_dataset(prob, br, {"source": "frictionless", "branch": branch, "omega": omega,
+                                                  "setup": po._to_dict(setup)})
 
 
 def _textbook(args, po):

@@ -47,7 +47,8 @@ def _multipliers(ax, ds: xr.Dataset, color_by=None) -> None:
     sc = ax.scatter(re[~trivial], im[~trivial], c=c[~trivial], s=9, cmap="viridis", zorder=3)
     ax.plot(re[trivial], im[trivial], "x", color="0.4", ms=5, label="trivial")
     lim = max(1.3, min(np.abs(np.concatenate([re.ravel(), im.ravel()])).max() * 1.1, 4.0))
-    ax.set(xlim=(-lim, lim), ylim=(-lim, lim), title="Floquet multipliers")
+    largest = float(np.hypot(re, im)[~trivial].max(initial=0.0))
+    ax.set(xlim=(-lim, lim), ylim=(-lim, lim), title=f"Floquet multipliers (largest |mu| {largest:.3g})")
     ax.legend(fontsize=7, loc="lower left")
     if color_by is not None:
         plt.colorbar(sc, ax=ax, shrink=0.7, label=ds.attrs.get("parameter", ""))
