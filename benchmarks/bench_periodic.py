@@ -3,7 +3,7 @@
 1. one periodic orbit with its Floquet multipliers from a good guess (van der Pol, mu = 1), warm, one core
    (target <= 50 ms);
 2. a 100-point branch of periodic orbits with every test function (Roessler in c, through its period
-   doubling) (target <= 30 s);
+   doubling; and the frictionless tippedisk's family in the energy) (target <= 30 s);
 3. a 64 x 64 map of the largest Lyapunov exponent of 20-s tippedisk runs from the Table 3 start over
    (Omega, eps), batch mode on threads (target <= 60 s on 2 cores).
 
@@ -52,6 +52,16 @@ def main() -> None:
                           repeat=max(1, args.repeat // 2))
     print(f"branch of {len(br.points)} periodic orbits (Roessler, c from 2.5 to {br.points[-1].u[-1]:.4g}, "
           f"{' '.join(sp.label for sp in br.special_points)}): {t:.2f} s [target 30 s]")
+
+    import tippedisk_analysis as td
+
+    frictionless = td.Setup(friction=td.Friction(mu=0.0))
+    po.tippedisk_lyapunov_family(frictionless, "inverted", 40.0, 0.402, options=co.Options(max_points=2))  # compile
+    t0 = time.perf_counter()
+    br, _prob = po.tippedisk_lyapunov_family(frictionless, "inverted", 40.0, 0.6,
+                                             options=co.Options(ds=0.02, ds_max=0.1, max_points=100))
+    print(f"branch of {len(br.points)} periodic orbits of the frictionless tippedisk (7 states, E_tot "
+          f"{br.points[0].u[-1]:.4f} -> {br.points[-1].u[-1]:.4f} J): {time.perf_counter() - t0:.2f} s [target 30 s]")
 
     n = args.n
     t0 = time.perf_counter()
