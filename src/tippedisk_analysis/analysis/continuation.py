@@ -24,7 +24,9 @@ Special points (test functions on the eigenvalues s_i of the state Jacobian):
 Each is located along the arclength by Brent's method on a smooth function in eigenvalue units
 (the real eigenvalue nearest 0; the real part of the complex pair nearest the imaginary axis;
 the tangent's parameter component for folds) to |value| < ``locate_tol``, and inserted into
-the branch as its own point.
+the branch as its own point. Problems may define their own test functions (``tests``,
+``located_value``, ``accept``; e.g. on Floquet multipliers), a moving reference
+(``set_reference``) and special points at which a branch ends (``terminal``).
 """
 
 from __future__ import annotations
@@ -79,6 +81,8 @@ class Problem:
     scale: np.ndarray
     parameters: tuple[int, ...]
     bounds: dict
+    terminal: frozenset = frozenset()  # kinds of special points at which a branch ends (e.g. a branch of
+    # periodic orbits at the Hopf point where its amplitude vanishes)
 
     def residual(self, u: np.ndarray) -> np.ndarray:
         raise NotImplementedError
@@ -102,6 +106,12 @@ class Problem:
         """Map an iterate onto a known solution manifold (default: none). A family of equilibria
         known in closed form keeps its states exact this way."""
         return u
+
+    def set_reference(self, u: np.ndarray) -> None:
+        """Called with the start guess, the corrected start and every accepted point of a branch (default:
+        nothing). Problems with a moving reference, e.g. the phase condition of periodic orbits relative to
+        the last orbit found (AUTO, BifurcationKit), update it here; located special points and bound points
+        are computed with the reference of the regular point before them."""
 
     def tests(self, point: "Point") -> dict[str, float]:
         """Test functions whose sign changes mark special points (default: equilibrium branches)."""
@@ -265,6 +275,7 @@ def continue_branch(problem: Problem, u0: np.ndarray, options: Options = Options
     u0 = np.asarray(u0, dtype=float)
     if not np.all(np.isfinite(u0)):
         raise ParameterError("the start point has non-finite entries; give finite values")
+    problem.set_reference(u0)
     F = problem.residual(u0)
     allowed = START_TOL * (1.0 + np.abs(problem.jacobian(u0)) @ np.abs(u0))
     if not np.all(np.abs(F) <= allowed):
@@ -274,6 +285,7 @@ def continue_branch(problem: Problem, u0: np.ndarray, options: Options = Options
     u, iterations = correct(problem, u0, None, options)
     if u is None:
         raise ParameterError("Newton's method did not converge from the start point; give a point on the branch")
+    problem.set_reference(u)
     t = _tangent(problem, u, tangent)
     if tangent is None and direction * t[problem.parameters[0]] < 0:
         t = -t
@@ -311,8 +323,16 @@ def continue_branch(problem: Problem, u0: np.ndarray, options: Options = Options
             message = f"reached the bound {problem.names[crossed[0]]} = {crossed[1]:g}"
             break
         if detect:
+            n_special = len(special)
             _detect_and_locate(problem, last, new, special, points, options)
+            ends = [sp for sp in special[n_special:] if sp.kind in problem.terminal]
+            if ends:  # the branch ends at the first terminal special point: drop what lies beyond it
+                del points[ends[0].index + 1:]
+                del special[special.index(ends[0]) + 1:]
+                message = f"ended at a {ends[0].kind} point at {_where(problem, ends[0].u)}"
+                break
         points.append(new)
+        problem.set_reference(new.u)
         if on_point is not None:
             on_point(new)
         ds = min(options.ds_max, ds * options.growth)
@@ -412,7 +432,7 @@ def _locate(problem, kind: str, last: Point, new: Point, options: Options):
 
 LABELS = {"fold": "LP", "branch_point": "BP", "hopf": "HOPF", "bogdanov_takens": "BT", "zero_hopf": "ZH",
           "double_hopf": "HH", "bautin": "GH", "cusp": "CP", "line_saddle_change": "LS",
-          "line_focus_node": "LF"}
+          "line_focus_node": "LF", "period_doubling": "PD", "neimark_sacker": "NS", "homoclinic": "HC"}
 
 
 def _label(special: list) -> None:

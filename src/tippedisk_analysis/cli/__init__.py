@@ -19,9 +19,8 @@ import warnings
 
 from ..errors import TippediskError, TippediskWarning
 from ..version import __version__
-from . import (animate, bifurcation, continuation, outcome_map, plot, poincare, simulate,  # noqa: F401
-               stability_map, study)  # registration
-from . import basins  # noqa: F401 (registration)
+from . import (animate, basins, bifurcation, continuation, lyapunov, outcome_map, periodic_orbits, plot,  # noqa: F401
+               poincare, simulate, stability_map, study)  # registration
 from .registry import COMMANDS
 
 EXIT_INTERRUPTED = 130  # 128 + SIGINT, as shells report it

@@ -1,0 +1,69 @@
+"""``tippedisk lyapunov``: Lyapunov exponents of the reduced tippedisk (one run: the spectrum with its
+convergence history; ranges START:STOP:N of --omega and --eps: a resumable map of the largest exponent), or
+of a textbook system (--system lorenz)."""
+
+from __future__ import annotations
+
+from .. import defaults
+from ..errors import ParameterError
+from .common import finite_float, positive_int, range_type, writable
+from .registry import command
+
+
+def _arguments(p) -> None:
+    p.add_argument("--omega", type=range_type("omega"), help="initial spin Omega [rad/s]: one value (a run) or "
+                   "START:STOP:N (a map); Table 3 start otherwise (default 40)")
+    p.add_argument("--eps", type=range_type("eps"), help="smoothing eps [m/s]: one value or START:STOP:N (default 0.1)")
+    p.add_argument("--mu", type=finite_float, help="friction coefficient (default 0.3)")
+    p.add_argument("--dgamma0", type=finite_float, default=0.1, help="gamma(0) + pi/2 [rad] (default 0.1)")
+    p.add_argument("--t-end", type=finite_float, help="length of each run [s] (default 20; --system: 1000)")
+    p.add_argument("--dt", type=finite_float, help="re-orthonormalisation interval (default 0.1 s for a run, "
+                                                   "0.5 s for a map, 1 for --system)")
+    p.add_argument("--transient", type=finite_float, default=0.0, help="not accumulated at the start (default 0)")
+    p.add_argument("--n-exponents", type=positive_int, help="exponents of a run (default all 7)")
+    p.add_argument("--system", help="a textbook system instead of the tippedisk: lorenz")
+    p.add_argument("--tol", type=finite_float, help=f"integrator tolerance (default 1e-12; maps {defaults.MAP_TOL:g})")
+    p.add_argument("--chunk-size", type=positive_int, default=128, help="map points per stored chunk (default 128)")
+    p.add_argument("--batch-size", type=positive_int, default=defaults.BATCH_SIZE, help="SIMD lanes (default 4)")
+    p.add_argument("--threads", type=positive_int, help="threads without --scheduler (default: cores)")
+    p.add_argument("--scheduler", help="dask.distributed scheduler address, or local:N")
+    p.add_argument("--output", "-o", required=True, help="netCDF file (a map's chunks go to OUTPUT.chunks/)")
+
+
+@command("lyapunov", "Lyapunov exponents: a run's spectrum, or a map of the largest over (Omega, eps)", _arguments)
+def lyapunov(args) -> int:
+    import dataclasses
+
+    from .. import results
+    from ..analysis import lyapunov as ly
+    from ..parameters import Friction, InitialState, Setup, to_dict
+
+    output = writable(args.output)
+    if args.system:
+        if args.system != "lorenz":
+            raise ParameterError(f"--system {args.system!r}: the Lyapunov command knows lorenz")
+        if args.omega or args.eps:
+            raise ParameterError("--omega and --eps belong to the tippedisk, not to --system")
+        ds = ly.textbook_spectrum("lorenz", [1.0, 1.0, 1.0], t_end=args.t_end or 1000.0, dt=args.dt or 1.0,
+                                  transient=args.transient or 10.0, tol=args.tol or ly.TOL)
+    else:
+        omega = args.omega or (40.0, 40.0, 1)
+        eps = args.eps or (Friction().eps, Friction().eps, 1)
+        friction = {"mu": args.mu} if args.mu is not None else {}
+        if omega[2] > 1 or eps[2] > 1:
+            if args.n_exponents not in (None, 1) or args.transient:
+                raise ParameterError("maps compute the largest exponent from t = 0: drop --n-exponents / --transient")
+            setup = Setup(friction=dataclasses.replace(Friction(), **friction))
+            ds = ly.lyapunov_map(omega, eps, output=output, scheduler=args.scheduler, threads=args.threads,
+                                 t_end=args.t_end or 20.0, dt=args.dt or 0.5, dgamma0=args.dgamma0,
+                                 tol=args.tol or defaults.MAP_TOL, chunk_size=args.chunk_size,
+                                 batch_size=args.batch_size, setup=to_dict(setup))
+            print(f"{output}: {ds.attrs['message']}")
+            return 0 if ds.attrs["status"] == "completed" else 1
+        setup = Setup(friction=dataclasses.replace(Friction(), eps=eps[0], **friction))
+        initial = InitialState(alpha_dot=omega[0], gamma=-1.5707963267948966 + args.dgamma0)
+        ds = ly.tippedisk_spectrum(setup, initial, t_end=args.t_end or 20.0, dt=args.dt or ly.DT,
+                                   transient=args.transient, n_exponents=args.n_exponents, tol=args.tol or ly.TOL)
+    results.save(ds, output)
+    print(f"{output}: {ds.attrs['message']}")
+    return 0 if ds.attrs["status"] == "completed" else 1

@@ -1,0 +1,157 @@
+"""``tippedisk periodic-orbits``: periodic orbits by shooting, their Floquet multipliers and branches.
+
+On the tippedisk (``--from-hopf``, ``--from-run``) Newton searches for an orbit of the reduced system and
+reports what it found; with friction there is none (docs/periodic_orbits.md). Exit status: 0 an orbit
+(or a completed branch); 3 no periodic orbit (the dataset is written: per point ``orbit_status`` says
+whether Newton converged to an equilibrium or did not converge, with the residual and the energy lost over
+the trial period); 1 a numerical failure (non-finite flow, a branch ended by the corrector); 2 bad input
+(nothing written). ``--system`` demonstrates the method on the textbook systems of the tests.
+"""
+
+from __future__ import annotations
+
+from ..errors import ParameterError
+from .common import add_output, finite_float, positive_int, writable
+from .registry import command
+
+EXIT_NO_ORBIT = 3
+
+
+def _arguments(p) -> None:
+    source = p.add_argument_group("start (give exactly one)")
+    source.add_argument("--from-hopf", metavar="FILE:LABEL", help="a Hopf point of a continuation dataset, e.g. "
+                                                                  "c.nc:HOPF1 (tippedisk continue)")
+    source.add_argument("--from-run", metavar="FILE", help="a simulation of an ODE model: Newton from a Poincaré "
+                                                           "return (tippedisk simulate)")
+    source.add_argument("--system", help="a textbook system: vanderpol, hopf, bautin, roessler, torus, homoclinic")
+    source.add_argument("--from-orbit", metavar="FILE:POINT", help="an orbit of a periodic_orbits dataset, e.g. "
+                                                                    "b.nc:5 (corrected, then continued with --to)")
+    source.add_argument("--frictionless", metavar="BRANCH:OMEGA", help="the tippedisk without friction (mu = 0): "
+                        "the family of orbits born at a spinning equilibrium, e.g. inverted:40, continued in the "
+                        "energy to --to E_MAX [J] (default E + 0.1 J)")
+    tip = p.add_argument_group("tippedisk options")
+    tip.add_argument("--amplitudes", default="0.001,0.01,0.05",
+                     help="--from-hopf: guess radii r of x_H + 2 r Re(q) (default 0.001,0.01,0.05)")
+    tip.add_argument("--crossing", type=int, default=-2, help="--from-run: the return to start from (default -2, "
+                                                              "the last but one)")
+    tip.add_argument("--section", default="beta_dot=0", help="--from-run: section NAME=LEVEL (default beta_dot=0)")
+    tip.add_argument("--max-iter", type=positive_int, default=25, help="Newton steps (default 25)")
+    book = p.add_argument_group("--system / --from-orbit options")
+    book.add_argument("--to", type=finite_float, help="continue the branch in the system's parameter to this value")
+    book.add_argument("--parameter", help="--from-orbit: the continuation parameter (default the dataset's)")
+    book.add_argument("--radius", type=finite_float, default=0.05, help="orbit radius of a Hopf start (default 0.05)")
+    book.add_argument("--period-max", type=finite_float, help="stop the branch at this period (homoclinic approach)")
+    book.add_argument("--segments", type=positive_int, help="shooting segments (default 1, or the dataset's)")
+    book.add_argument("--phase", default="poincare", choices=("poincare", "integral"), help="phase condition")
+    book.add_argument("--max-points", type=positive_int, default=200, help="branch points per direction (200)")
+    add_output(p)
+
+
+@command("periodic-orbits", "periodic orbits by shooting: Floquet multipliers, branches (no orbit on the "
+                            "tippedisk with friction: exit 3)", _arguments)
+def periodic_orbits(args) -> int:
+    from .. import results
+    from ..analysis import periodic as po
+
+    starts = [s for s in (args.from_hopf, args.from_run, args.system, args.from_orbit, args.frictionless) if s]
+    if len(starts) != 1:
+        raise ParameterError("give exactly one of --from-hopf FILE:LABEL, --from-run FILE, --system NAME, "
+                             "--from-orbit FILE:POINT, --frictionless BRANCH:OMEGA")
+    output = writable(args.output)
+    if args.from_hopf:
+        path, _, label = args.from_hopf.rpartition(":")
+        if not path or not label:
+            raise ParameterError(f"--from-hopf {args.from_hopf!r} is not FILE:LABEL; give e.g. c.nc:HOPF1")
+        try:
+            amplitudes = [float(a) for a in args.amplitudes.split(",")]
+        except ValueError:
+            raise ParameterError(f"--amplitudes {args.amplitudes!r}: give numbers separated by commas") from None
+        if not amplitudes or any(not a > 0 for a in amplitudes):
+            raise ParameterError("--amplitudes must be positive numbers, e.g. 0.001,0.01")
+        ds = po.tippedisk_orbits_from_hopf(results.load(path), label, amplitudes, max_iter=args.max_iter)
+    elif args.from_run:
+        ds = po.tippedisk_orbits_from_run(results.load(args.from_run), crossing=args.crossing, section=args.section,
+                                          max_iter=args.max_iter)
+    elif args.from_orbit:
+        path, _, point = args.from_orbit.rpartition(":")
+        try:
+            index = int(point)
+        except ValueError:
+            raise ParameterError(f"--from-orbit {args.from_orbit!r} is not FILE:POINT; give e.g. b.nc:5") from None
+        source = results.load(path)
+        orbit = po.orbit_from_dataset(source, index, max_iter=args.max_iter)
+        parameter = args.parameter or source.attrs.get("parameter") or ""
+        ds = _orbit_or_branch(args, po, orbit, parameter, {"source": "dataset", "file": path, "point": index})
+    elif args.frictionless:
+        ds = _frictionless(args, po)
+    else:
+        ds = _textbook(args, po)
+    results.save(ds, output)
+    print(f"{output}: {ds.attrs['message']}")
+    if ds.attrs["status"] == "no_orbit":
+        return EXIT_NO_ORBIT
+    return 0 if ds.attrs["status"] == "completed" else 1
+
+
+def _frictionless(args, po):
+    from ..analysis import continuation
+    from ..parameters import Friction, Setup
+
+    branch, _, omega = args.frictionless.partition(":")
+    try:
+        omega = float(omega)
+    except ValueError:
+        raise ParameterError(f"--frictionless {args.frictionless!r} is not BRANCH:OMEGA; give e.g. inverted:40") from None
+    setup = Setup(friction=Friction(mu=0.0))
+    br, prob = po.tippedisk_lyapunov_family(setup, branch, omega, args.to, radius=args.radius if args.radius != 0.05
+                                            else 1e-3, options=continuation.Options(ds=0.02, ds_max=0.1,
+                                                                                    max_points=args.max_points))
+    return po.tippedisk_branch_dataset(prob, br, {"source": "frictionless", "branch": branch, "omega": omega,
+                                                  "setup": po._to_dict(setup)})
+
+
+def _textbook(args, po):
+    tb = po.TEXTBOOK.get(args.system)
+    if tb is None or not tb.start:
+        names = ", ".join(k for k, v in po.TEXTBOOK.items() if v.start)
+        raise ParameterError(f"unknown system {args.system!r} for periodic orbits; choose one of {names}")
+    system = po.textbook_system(args.system)
+    if not args.radius > 0:
+        raise ParameterError(f"--radius {args.radius} must be positive")
+    if "hopf" in tb.start:
+        value, state = tb.start["hopf"]
+        orbit, _g = po.orbit_from_hopf(system, tb.parameter, value, state, radius=args.radius,
+                                       segments=args.segments or 1, phase=args.phase)
+    else:
+        value, state, period = tb.start["orbit"]
+        pars = system.with_pars(**{tb.parameter: value})
+        if args.system == "roessler":
+            state, period = po.simulation_guess(system, state, pars, index=1, level=0.0, transient=200.0)
+        orbit = po.find_orbit(system, state, period, pars, segments=args.segments or 1, phase=args.phase)
+        orbit.value, orbit.parameter = value, tb.parameter
+    config = {"source": "textbook", "start": {k: list(map(float, v[1])) for k, v in tb.start.items()},
+              "facts": tb.facts}
+    return _orbit_or_branch(args, po, orbit, tb.parameter, config)
+
+
+def _orbit_or_branch(args, po, orbit, parameter: str, config: dict):
+    """The orbit alone, or (with --to) its branch in ``parameter``."""
+    from ..analysis import continuation
+
+    if args.to is None:
+        status = "completed" if orbit.converged else ("no_orbit" if orbit.status in ("equilibrium", "not_converged")
+                                                      else "failed")
+        return po.orbits_dataset([orbit], status, orbit.message, config)
+    if not orbit.converged:
+        raise ParameterError(f"no start orbit for the branch: {orbit.message}")
+    if not parameter:
+        raise ParameterError("give --parameter (the continuation parameter)")
+    start = float(orbit.pars[orbit.system.parameter_index(parameter)])
+    orbit.parameter, orbit.value = parameter, start
+    if args.to == start:
+        raise ParameterError(f"--to {args.to:g} equals the start value of {parameter}")
+    bounds = {parameter: (min(start, args.to), max(start, args.to))}
+    br, prob = po.continue_orbits(orbit, parameter, bounds=bounds, direction=1 if args.to > start else -1,
+                                  segments=args.segments, phase=args.phase, period_max=args.period_max,
+                                  options=continuation.Options(ds=0.02, ds_max=0.1, max_points=args.max_points))
+    return po.branch_dataset(prob, br, {**config, "to": args.to})
