@@ -1397,23 +1397,14 @@ TIPPEDISK_OBSERVABLES = (("z_S", "m"), ("E_tot", "J"), ("lambda_N", "N"), ("alph
 
 @functools.lru_cache(maxsize=None)
 def _tippedisk_expressions():
-    """Observables of the reduced state: ODE Model 1's outputs with the reduction's substitutions (alpha = 0,
-    x = y = 0, z = r sin(beta), z_dot = r cos(beta) beta_dot, v_G in the R-frame) -- the same map as
-    :func:`.reduced.full_from_reduced`."""
+    """Observables of the reduced state (the expressions of :func:`.reduced.reduced_system`)."""
     import heyoka as hy
 
-    from ..models import ode
     from . import reduced
 
     red = reduced.reduced_system()
-    _full_vars, _sys, _fall, outputs = ode.system(ode.EULER)
-    beta, _gamma, u_x, u_y, *_w = red.variables
-    r = ode.P["r"]
-    subs = {"x": hy.expression(0.0), "y": hy.expression(0.0), "alpha": hy.expression(0.0), "z": r * hy.sin(beta),
-            "z_dot": r * hy.cos(beta) * red.rhs[0], "x_dot": u_x, "y_dot": u_y, "W_friction": hy.expression(0.0)}
-    out = {name: hy.subs(expr, subs) for name, expr in zip(ode.OUTPUT_NAMES, outputs)}
-    values = {"z_S": out["z_S"], "E_tot": out["E_kin"] + out["E_pot"], "lambda_N": red.lambda_N,
-              "alpha_dot": red.alpha_dot, "slip": hy.sqrt(red.slip[0] ** 2 + red.slip[1] ** 2)}
+    values = {"z_S": red.z_S, "E_tot": red.E_tot, "lambda_N": red.lambda_N, "alpha_dot": red.alpha_dot,
+              "slip": hy.sqrt(red.slip[0] ** 2 + red.slip[1] ** 2)}
     return red, tuple((name, units, values[name]) for name, units in TIPPEDISK_OBSERVABLES)
 
 

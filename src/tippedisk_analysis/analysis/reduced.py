@@ -59,6 +59,8 @@ class ReducedSystem:
     alpha_dot: object  # spin rate about e_z^I (inverse of (3.3)) [rad/s]
     lambda_N: object  # normal force at C1 [N]
     slip: list  # gamma_T1 in the R-frame [m/s]
+    z_S: object  # height of S [m]
+    E_tot: object  # total energy E_kin + E_pot [J]
 
 
 @functools.lru_cache(maxsize=None)
@@ -98,7 +100,8 @@ def reduced_system(split_slip_norm: bool = False) -> ReducedSystem:
         reduce(rhs_full["omega_z"]),
     ]
     return ReducedSystem(list(variables), rhs, alpha_dot, reduce(out["lambda_N"]),
-                         [reduce(out["slip_x"]), reduce(out["slip_y"])])
+                         [reduce(out["slip_x"]), reduce(out["slip_y"])], reduce(out["z_S"]),
+                         reduce(out["E_kin"] + out["E_pot"]))
 
 
 @functools.lru_cache(maxsize=None)
