@@ -7,29 +7,18 @@ import numpy as np
 import xarray as xr
 
 from ..results import config_of
+from . import labels
 from .registry import figure
 
-STYLE = {0: "-", 1: ":", 2: "--"}  # stability flag: stable solid, marginal dotted, unstable dashed
-UNITS = {"omega": "rad/s", "eps": "m/s", "mu": "-", "e": "m", "inertia": "-"}
-SYMBOL = {"omega": r"spin rate $\Omega$", "eps": r"smoothing $\varepsilon$", "mu": r"friction coefficient $\mu$",
-          "e": "eccentricity e", "inertia": "inertia scale"}
+UNITS = {"omega": "rad s-1", "eps": "m s-1", "mu": "1", "e": "m", "inertia": "1"}
 
 
 def axis_label(name: str) -> str:
-    return f"{SYMBOL.get(name, name)} [{UNITS.get(name, '')}]"
+    return labels.axis_label(name, UNITS.get(name, ""))
 
 
 def _specials(ds: xr.Dataset):
     return [(str(label), int(index)) for label, index in zip(ds["special_label"].values, ds["special_index"].values)]
-
-
-def _segments(x, y, flag):
-    """Runs of equal flag, each with the first point of the next run (so the curve is continuous)."""
-    start = 0
-    for i in range(1, len(x) + 1):
-        if i == len(x) or flag[i] != flag[start]:
-            yield x[start:i + (i < len(x))], y[start:i + (i < len(x))], int(flag[start])
-            start = i
 
 
 @figure("continuation")
@@ -46,8 +35,8 @@ def continuation_figure(ds: xr.Dataset):
     stability = ds["stability"].values.copy()
     for i in np.flatnonzero(stability == 1)[::-1]:  # special points (marginal) take the style of the next run
         stability[i] = stability[i + 1] if i + 1 < len(stability) else stability[i - 1]
-    for xs, ys, flag in _segments(x, ds["max_real_eig"].values, stability):
-        ax.plot(xs, ys, STYLE[flag], color="k", lw=1.4)
+    for xs, ys, flag in labels.runs(x, ds["max_real_eig"].values, stability):
+        ax.plot(xs, ys, labels.STABILITY_STYLE[flag], color="k", lw=1.4)
     ax.axhline(0.0, color="0.6", lw=0.8)
     ax.set_yscale("symlog", linthresh=0.1)
     ax.set(ylabel=r"max Re $s$ [1/s]", title=f"{config_of(ds).get('branch', '')} branch: stable solid, "
@@ -91,7 +80,7 @@ def curve_figure(curves: list, background=None, ax=None):
         kind = ds.attrs.get("critical", "")
         hopf_part = ds["critical_product"].values > 0 if "critical_product" in ds else np.ones(len(x), bool)
         color, labelled = None, False
-        for xs, ys, is_hopf in _segments(x, y, hopf_part):
+        for xs, ys, is_hopf in labels.runs(x, y, hopf_part):
             label = None if (labelled or not is_hopf) else f"{kind} curve from {config_of(ds).get('source_label', '')}"
             line = ax.plot(xs, ys, ("-" if kind == "hopf" else "--") if is_hopf else ":", lw=1.5 if is_hopf else 0.8,
                            color=color, label=label)[0]

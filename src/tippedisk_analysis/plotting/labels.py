@@ -1,4 +1,5 @@
-"""One style for axis labels across the figures: "quantity symbol [unit]", units as in the text (rad/s)."""
+"""One style across the figures: axis labels "quantity symbol [unit]" (units as in the text, rad/s), and
+branches drawn stable solid, marginal dotted, unstable dashed."""
 
 from __future__ import annotations
 
@@ -23,6 +24,7 @@ NAMES = {
     "E_pot": r"$E_\mathrm{pot}$",
     "E_tot": r"$E_\mathrm{tot}$",
     "time": "time $t$",
+    "inertia": "inertia scale",
 }
 
 UNITS = {"rad s-1": "rad/s", "m s-1": "m/s", "s-1": "1/s", "m s-2": "m/s^2", "rad s-2": "rad/s^2", "1": "-",
@@ -38,3 +40,15 @@ def axis_label(name: str, units: str = "") -> str:
     """e.g. axis_label("omega", "rad s-1") -> "spin rate $\\Omega$ [rad/s]"."""
     text = NAMES.get(name, name.replace("_", " "))
     return f"{text} [{unit(units)}]" if units else text
+
+
+STABILITY_STYLE = {0: "-", 1: ":", 2: "--"}  # flag values of stability.STABILITY_FLAGS
+
+
+def runs(x, y, flag):
+    """(x, y, flag) pieces of equal ``flag``, each with the first point of the next piece (no gaps)."""
+    start = 0
+    for i in range(1, len(x) + 1):
+        if i == len(x) or flag[i] != flag[start]:
+            yield x[start:i + (i < len(x))], y[start:i + (i < len(x))], int(flag[start])
+            start = i

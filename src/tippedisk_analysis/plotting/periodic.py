@@ -10,18 +10,11 @@ import xarray as xr
 from matplotlib.colors import TwoSlopeNorm
 
 from ..results import config_of
+from .labels import STABILITY_STYLE as STYLE
+from .labels import runs
 from .registry import figure
 
-STYLE = {0: "-", 1: ":", 2: "--"}  # stability: stable solid, marginal dotted, unstable dashed
 STATUS_TEXT = {0: "orbit", 1: "equilibrium", 2: "not converged", 3: "non-finite"}
-
-
-def _segments(x, y, flag):
-    start = 0
-    for i in range(1, len(x) + 1):
-        if i == len(x) or flag[i] != flag[start]:
-            yield x[start:i + (i < len(x))], y[start:i + (i < len(x))], int(flag[start])
-            start = i
 
 
 def _state_pair(ds: xr.Dataset) -> tuple[int, int]:
@@ -71,7 +64,7 @@ def _branch_figure(ds: xr.Dataset, name: str):
     if config.get("source") == "hopf" or "hopf" in config.get("start", {}):  # born at a Hopf point
         ax.axhline(0.0, color="0.6", lw=1.0, label="equilibrium")
     stab = ds.stability.values
-    for k, (xs, ys, flag) in enumerate(_segments(x, amp, stab)):
+    for k, (xs, ys, flag) in enumerate(runs(x, amp, stab)):
         ax.plot(xs, ys, STYLE[flag], color="k", lw=1.5)
     ax.plot([], [], "-", color="k", label="stable orbits")
     ax.plot([], [], "--", color="k", label="unstable orbits")
