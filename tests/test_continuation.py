@@ -54,8 +54,15 @@ def test_palc_passes_a_fold_that_natural_continuation_cannot():
     assert abs(fold.u[2] - 1.0) < 1e-10 and abs(fold.u[0]) < 1e-8  # p = 1, x = 0
     assert abs(fold.value) < 1e-10 and abs(fold.data["a"]) == pytest.approx(1.0, rel=1e-9)
     np.testing.assert_allclose(prob.residual(fold.u), 0, atol=1e-12)
-    # natural-parameter continuation (Newton at fixed p) finds nothing just below the fold
-    assert co.solve_at(prob, np.array([0.01, 1e-4, 0.99]), 2, 0.99) is None
+    # natural-parameter continuation (Newton at fixed p, from the previous solution) follows the upper half
+    # down to the fold and stops there: it never reaches the lower half that PALC continued on
+    u, p_natural = u0.copy(), 1.9
+    while True:
+        nxt = co.solve_at(prob, np.array([u[0], u[1], p_natural - 0.05]), 2, p_natural - 0.05)
+        if nxt is None:
+            break
+        u, p_natural = nxt, p_natural - 0.05
+    assert 1.0 <= p_natural < 1.05 and u[0] > 0
 
 
 @pytest.mark.parametrize("name, fx, exact", [
@@ -208,6 +215,14 @@ def _special(ds, label):
 
 
 def test_branch_points_are_the_stationary_solutions(branch):
+    """The corrector alone (no projection onto the closed form) finds the stationary solutions, and the
+    stored branch's states are them."""
+    prob = sc.problem(["omega"], SETUP, bounds={"omega": (20.0, 40.0)})
+    prob._project = None  # Gauss-Newton on [rhs, alpha_dot - Omega] only
+    free = co.continue_branch(prob, np.append(st.stationary_state("inverted", [20.0])[:, 0], 20.0))
+    u = free.array("u")
+    np.testing.assert_allclose(u[:, :7], st.stationary_state("inverted", u[:, 7]).T, atol=1e-10)
+    assert float(u[-1, 7]) == 40.0
     assert branch.attrs["status"] == "completed" and float(branch.omega[-1]) == 100.0
     assert float(branch.residual.max()) < 1e-10
     pars = ode.parameter_vector(SETUP)
@@ -415,11 +430,15 @@ def test_stored_continuation_datasets_are_reproduced(branch):
     assert [str(v) for v in stored.special_label.values] == [str(v) for v in branch.special_label.values]
     for name in ("special_a", "special_b", "special_k", "special_frequency"):
         np.testing.assert_allclose(stored[name].values, branch[name].values, rtol=1e-7, atol=1e-12)
-    curve = td.load(DATA / "continuation" / "continuation_curve_HOPF1.nc")
-    assert curve.attrs["labels"] == "BT1 HH1"
+    stored_curve = td.load(DATA / "continuation" / "continuation_curve_HOPF1.nc")
+    curve = sc.continue_curve(branch, "HOPF1", ("omega", "eps"), bounds={"eps": (0.1, 0.4), "omega": (0, 100)})
+    assert curve.attrs["labels"] == stored_curve.attrs["labels"] == "BT1 HH1"
+    for label in ("BT1", "HH1"):
+        i, j = int(_special(curve, label)["index"]), int(_special(stored_curve, label)["index"])
+        for name in ("omega", "eps"):
+            assert float(curve[name][i]) == pytest.approx(float(stored_curve[name][j]), rel=1e-8)
     i = int(_special(curve, "BT1")["index"])
-    assert float(curve.omega[i]) == pytest.approx(28.583595, abs=1e-6)
-    assert float(curve.eps[i]) == pytest.approx(0.33645952, abs=1e-8)
+    assert (float(curve.omega[i]), float(curve.eps[i])) == pytest.approx((28.583595, 0.33645952), abs=1e-6)
 
 
 def test_branch_through_a_point_of_a_dataset_equals_the_branch_from_the_stationary_solution(branch):
@@ -435,3 +454,61 @@ def test_branch_through_a_point_of_a_dataset_equals_the_branch_from_the_stationa
         if abs(eps_direct - 0.25) > 1e-6:  # (the start itself is a Hopf point)
             eps_through = [float(through.eps[int(i)]) for i in through.special_index.values]
             assert min(abs(e - eps_direct) for e in eps_through) < 1e-9
+
+
+def _bt_normal_form_problem(critical):
+    """x' = y, y' = b1 + b2 x + x^2 - x y: fold curve b1 = b2^2/4, Hopf curve b1 = 0 (b2 < 0), BT at (0, 0)."""
+    x, y = hy.make_vars("x", "y")
+    b1, b2 = hy.par[0], hy.par[1]
+    field = CompiledField([y, b1 + b2 * x + x * x - x * y], [x, y], [b1, b2])
+    params = [Parameter("b1", 1.0, runtime=((0, 1.0),), derivative=((0, 1.0),)),
+              Parameter("b2", 1.0, runtime=((1, 1.0),), derivative=((1, 1.0),))]
+    return EquilibriumProblem(field, [0.0, 0.0], params, state_names=("x", "y"), state_scale=(1, 1),
+                              bounds={0: (-1.0, 1.0), 1: (-1.5, 1.5)}, critical=critical)
+
+
+@pytest.mark.parametrize("critical, start", [("zero", (0.5, 0.0, 0.25, -1.0)), ("hopf", (0.0, 0.0, 0.0, -1.0))])
+def test_bogdanov_takens_point_of_the_normal_form_and_no_false_codim2_points(critical, start):
+    """Both the fold and the Hopf curve of the BT normal form meet at (b1, b2) = (0, 0); nothing else is
+    reported on them (a cusp test through a pole, a jumping eigenvalue order would give false points)."""
+    branch = co.continue_both_ways(_bt_normal_form_problem(critical), np.array(start), co.Options(ds=0.02, ds_max=0.05))
+    kinds = [sp.kind for sp in branch.special_points]
+    assert kinds == ["bogdanov_takens"], (kinds, branch.message)
+    np.testing.assert_allclose(branch.special_points[0].u[2:], [0.0, 0.0], atol=1e-8)
+    u = branch.array("u")
+    if critical == "zero":
+        np.testing.assert_allclose(u[:, 2], u[:, 3] ** 2 / 4, atol=1e-10)  # on the fold curve b1 = b2^2/4
+
+
+def test_a_neutral_saddle_is_not_a_double_hopf_point():
+    """Along the Hopf curve mu = 0 of a 4-D system, the other block's real eigenvalues nu +- sqrt(2) sum to 0
+    at nu = 0: the bialternate test vanishes there, but no second pair is on the axis."""
+    x = hy.make_vars("x0", "x1", "x2", "x3")
+    mu, nu = hy.par[0], hy.par[1]
+    r2 = x[0] * x[0] + x[1] * x[1]
+    field = CompiledField([mu * x[0] - x[1] - x[0] * r2, x[0] + mu * x[1] - x[1] * r2,
+                           nu * x[2] + 2 * x[3], x[2] + nu * x[3]], list(x), [mu, nu])
+    params = [Parameter("mu", 1.0, runtime=((0, 1.0),), derivative=((0, 1.0),)),
+              Parameter("nu", 1.0, runtime=((1, 1.0),), derivative=((1, 1.0),))]
+    prob = EquilibriumProblem(field, [0.0, -0.5], params, state_names=("x0", "x1", "x2", "x3"),
+                              state_scale=(1, 1, 1, 1), bounds={1: (-0.5, 0.5)}, critical="hopf")
+    branch = co.continue_branch(prob, np.array([0, 0, 0, 0, 0.0, -0.5]), co.Options(ds=0.02, ds_max=0.05),
+                                tangent=np.array([0, 0, 0, 0, 0, 1.0]))
+    assert float(branch.array("u")[-1, 5]) == 0.5 and not branch.special_points, branch.message
+
+
+def test_plot_options_observable_and_background(branch, tmp_path, capsys):
+    from tippedisk_analysis.cli import main
+
+    td.save(branch, tmp_path / "c.nc")
+    assert main(["plot", str(tmp_path / "c.nc"), "--observable", "lambda_N", "-o", str(tmp_path / "c.png")]) == 0
+    assert (tmp_path / "c.png").stat().st_size > 10_000
+    assert main(["plot", str(tmp_path / "c.nc"), "--observable", "zeta", "-o", str(tmp_path / "x.png")]) == 2
+    assert "no observable 'zeta'" in capsys.readouterr().err and not (tmp_path / "x.png").exists()
+    curve = td.load(DATA / "continuation" / "continuation_curve_BP1.nc")
+    td.save(curve, tmp_path / "z.nc")
+    td.save(maps.stability_map(np.linspace(25, 40, 16), np.linspace(0.15, 0.35, 9), critical=False),
+            tmp_path / "m.nc")
+    assert main(["plot", str(tmp_path / "z.nc"), "--over", str(tmp_path / "m.nc"), "-o", str(tmp_path / "z.png")]) == 0
+    assert main(["plot", str(tmp_path / "z.nc"), "--over", str(tmp_path / "c.nc"), "-o", str(tmp_path / "y.png")]) == 2
+    assert "give a stability map" in capsys.readouterr().err

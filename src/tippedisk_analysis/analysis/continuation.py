@@ -43,6 +43,8 @@ from ..errors import ParameterError
 
 
 START_TOL = 1e-6  # a start point's residual, relative to the size of its terms (it is corrected first)
+EASY_ITERATIONS = 3  # the step grows after a correction in at most this many Newton iterations
+ZERO_RATIO = 1e-3  # a located test function is this much smaller than at the ends (a pole or a jump is not)
 
 
 @dataclass(frozen=True)
@@ -67,6 +69,10 @@ class Options:
             raise ParameterError(f"step ds = {self.ds} must lie in [ds_min, ds_max] = [{self.ds_min}, {self.ds_max}]")
         if int(self.max_points) != self.max_points or self.max_points < 2:
             raise ParameterError(f"max_points = {self.max_points!r} must be an integer >= 2")
+        if not (isinstance(self.max_newton, int) and self.max_newton >= 1):
+            raise ParameterError(f"max_newton = {self.max_newton!r} must be an integer >= 1")
+        if self.growth < 1:
+            raise ParameterError(f"growth = {self.growth!r} must be >= 1 (the step grows after easy corrections)")
 
 
 class Problem:
@@ -254,9 +260,13 @@ def solve_at(problem: Problem, u_guess: np.ndarray, index: int, value: float, op
 
 def _step_to(problem, point: Point, sigma: float, options: Options) -> np.ndarray | None:
     """The branch point at scaled arclength sigma beyond ``point`` (predictor + corrector)."""
+    return _step(problem, point, sigma, options)[0]
+
+
+def _step(problem, point: Point, sigma: float, options: Options) -> tuple[np.ndarray | None, int]:
+    """(u, corrector iterations) at scaled arclength sigma beyond ``point``."""
     v0 = point.u / problem.scale
-    u, _ = correct(problem, (v0 + sigma * point.tangent) * problem.scale, (point.tangent, v0, sigma), options)
-    return u
+    return correct(problem, (v0 + sigma * point.tangent) * problem.scale, (point.tangent, v0, sigma), options)
 
 
 def _make_point(problem, u, previous_tangent, arclength, iterations, special="") -> Point:
@@ -291,13 +301,14 @@ def continue_branch(problem: Problem, u0: np.ndarray, options: Options = Options
         t = -t
     points = [Point(u, t, 0.0, _eigenvalues(problem.state_jacobian(u)), iterations)]
     special: list[SpecialPoint] = []
+    dropped: list[str] = []  # test-function sign changes that were not zeros
     ds, status, message = abs(options.ds), "completed", ""
     while True:
         if len(points) >= options.max_points:
             message = f"stopped after max_points = {options.max_points} points"
             break
         last = points[-1]
-        u_new = _step_to(problem, last, ds, options)
+        u_new, iterations = _step(problem, last, ds, options)
         if u_new is None:
             ds *= 0.5
             if ds < options.ds_min:
@@ -306,7 +317,7 @@ def continue_branch(problem: Problem, u0: np.ndarray, options: Options = Options
                            "a singular point or the end of the branch")
                 break
             continue
-        new = _make_point(problem, u_new, last.tangent, last.arclength + ds, 0)
+        new = _make_point(problem, u_new, last.tangent, last.arclength + ds, iterations)
         crossed = _first_bound_crossed(problem, last.u, new.u)
         if crossed is not None:
             end = _locate_bound(problem, last, ds, crossed, options)
@@ -318,13 +329,13 @@ def continue_branch(problem: Problem, u0: np.ndarray, options: Options = Options
                     break
                 continue
             if detect:
-                _detect_and_locate(problem, last, end, special, points, options)
+                _detect_and_locate(problem, last, end, special, points, options, dropped)
             points.append(end)
             message = f"reached the bound {problem.names[crossed[0]]} = {crossed[1]:g}"
             break
         if detect:
             n_special = len(special)
-            _detect_and_locate(problem, last, new, special, points, options)
+            _detect_and_locate(problem, last, new, special, points, options, dropped)
             ends = [sp for sp in special[n_special:] if sp.kind in problem.terminal]
             if ends:  # the branch ends at the first terminal special point: drop what lies beyond it
                 del points[ends[0].index + 1:]
@@ -335,7 +346,11 @@ def continue_branch(problem: Problem, u0: np.ndarray, options: Options = Options
         problem.set_reference(new.u)
         if on_point is not None:
             on_point(new)
-        ds = min(options.ds_max, ds * options.growth)
+        if iterations <= EASY_ITERATIONS:
+            ds = min(options.ds_max, ds * options.growth)
+    if dropped:
+        message += (f"; {len(dropped)} sign change(s) of a test function not located as a zero (a pole, a "
+                    f"discontinuity or a corrector failure): {', '.join(dropped)}")
     _label(special)
     return Branch(points, special, status, message, options)
 
@@ -376,13 +391,21 @@ def _locate_bound(problem, last: Point, ds: float, crossed, options) -> Point | 
 # ----------------------------------------------------------------------------- special points
 
 
-def _detect_and_locate(problem, last: Point, new: Point, special: list, points: list, options: Options) -> None:
-    """Test functions between ``last`` and ``new``; located points are appended to ``points``."""
+def _detect_and_locate(problem, last: Point, new: Point, special: list, points: list, options: Options,
+                       dropped: list) -> None:
+    """Test functions between ``last`` and ``new``; located points are appended to ``points``, sign
+    changes that are not zeros (poles, jumps) or could not be located are named in ``dropped``."""
     before, after = problem.tests(last), problem.tests(new)
     changed = [kind for kind in before if kind in after and before[kind] * after[kind] < 0]
     if "fold" in changed and "branch_point" in changed:
         changed.remove("branch_point")  # a real eigenvalue through 0 with the tangent turning: a fold
-    located = [sp for sp in (_locate(problem, kind, last, new, options) for kind in changed) if sp is not None]
+    located = []
+    for kind in changed:
+        found = _locate(problem, kind, last, new, options)
+        if found is None:
+            dropped.append(f"{kind} near {_where(problem, new.u)}")
+        elif found is not REJECTED:
+            located.append(found)
     for point, value, kind in sorted(located, key=lambda item: item[0].arclength):
         points.append(point)
         special.append(SpecialPoint(kind, len(points) - 1, point.u, point.eigenvalues, value,
@@ -422,12 +445,17 @@ def _locate(problem, kind: str, last: Point, new: Point, options: Options):
         sigma = brentq(f, 0.0, span, xtol=1e-14 * max(1.0, span), rtol=4 * np.finfo(float).eps, maxiter=200)
     except ValueError:  # the corrector failed inside the interval
         return None
+    if not abs(f(sigma)) <= ZERO_RATIO * max(map(abs, ends)):
+        return None  # the sign changed through a pole or a jump, not a zero
     point = at(sigma)
     value = smooth(sigma)
     if not problem.accept(kind, point, value, options):
-        return None
+        return REJECTED  # e.g. a neutral saddle where a Hopf test vanishes: not a special point, not an error
     point.special = kind
     return point, float(value), kind
+
+
+REJECTED = object()  # _locate: a zero the problem declines (no special point, nothing to report)
 
 
 LABELS = {"fold": "LP", "branch_point": "BP", "hopf": "HOPF", "bogdanov_takens": "BT", "zero_hopf": "ZH",

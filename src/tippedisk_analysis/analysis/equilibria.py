@@ -45,6 +45,10 @@ class Parameter:
     derivative: tuple = ()  # (tensor parameter position, coefficient) pairs
 
 
+REAL_TOL = 1e-7  # relative |Im s| below which an eigenvalue counts as real: the eigenvalues of a Jordan
+# block (at a Bogdanov-Takens point) are only determined to sqrt(machine eps)
+
+
 class EquilibriumProblem(continuation.Problem):
     """Unknowns u = (x, free parameter values); residual [f(x; p), g_k(x) - c_k, (critical eigenvalue)]."""
 
@@ -62,6 +66,7 @@ class EquilibriumProblem(continuation.Problem):
         if critical not in (None, "hopf", "zero"):
             raise ParameterError(f"critical = {critical!r}; give 'hopf', 'zero' or None")
         self.critical = critical
+        self._borders = None  # (w0, v0) of the bordered zero test, set by set_reference
         self.nonsmooth = nonsmooth  # (x, pars) -> (G_xs, Gamma): the C^1 term N(w) = (G_xs w)|Gamma w|
         self._project = project  # (u, problem) -> u on a closed-form solution manifold, or None
         self.names = (*state_names, *(p.name for p in self.free))
@@ -107,11 +112,17 @@ class EquilibriumProblem(continuation.Problem):
         return J[np.ix_(self.keep, self.keep)]
 
     # -- the critical eigenvalue(s) (codimension-one curves)
+    def set_reference(self, u: np.ndarray) -> None:
+        """The borders of the zero test: the singular vectors of J's smallest singular value at ``u``."""
+        if self.critical == "zero":
+            U, _sv, Vt = np.linalg.svd(self.state_jacobian(u))
+            self._borders = (U[:, -1].copy(), Vt[-1].copy())
+
     def _critical_indices(self, ev: np.ndarray) -> list[int]:
         """Eigenvalues of the critical pair (hopf: the two whose sum is nearest 0 among complex-conjugate
         and real pairs, so a Hopf curve continues through a Bogdanov-Takens point as a neutral-saddle
         curve) or the real eigenvalue nearest 0 (zero)."""
-        tiny = 1e-12 * max(1.0, np.abs(ev).max())
+        tiny = REAL_TOL * max(1.0, np.abs(ev).max())
         real = [i for i in range(len(ev)) if abs(ev[i].imag) <= tiny]
         if self.critical == "zero":
             return [min(real, key=lambda i: abs(ev[i].real))] if real else []
@@ -122,9 +133,10 @@ class EquilibriumProblem(continuation.Problem):
     def _critical_row(self, u: np.ndarray, T1: np.ndarray) -> tuple[float, np.ndarray]:
         """The critical quantity and its exact gradient with respect to u.
 
-        zero: g of the bordered system [[J, w0], [v0^T, 0]] [v; g] = [0; 1] (borders: the singular
-        vectors of the smallest singular value), zero iff J is singular, dg = -w^T dJ v (Govaerts'
-        minimally augmented system; smooth through a Bogdanov-Takens point, unlike the eigenvalue);
+        zero: g of the bordered system [[J, w0], [v0^T, 0]] [v; g] = [0; 1], zero iff J is singular,
+        dg = -w^T dJ v (Govaerts' minimally augmented system; smooth through a Bogdanov-Takens point,
+        unlike the eigenvalue). The borders are the singular vectors of the smallest singular value at
+        the last accepted point (:meth:`set_reference`), fixed while a point is corrected;
         hopf: half the trace of J on the critical pair's invariant subspace (Re lambda for a complex
         pair), d tr = tr(W^T dJ V), smooth through a Bogdanov-Takens point where the pair turns real.
         """
@@ -132,9 +144,11 @@ class EquilibriumProblem(continuation.Problem):
         T2 = self.field.tensor(u[: self.n], self.runtime(u), 2)[: self.n]
         T2d = T2[np.ix_(self.keep, self.keep, np.arange(T2.shape[2]))]
         if self.critical == "zero":
-            U, _sv, Vt = np.linalg.svd(Jd)
+            if self._borders is None:
+                self.set_reference(u)
+            left, right = self._borders
             k = Jd.shape[0]
-            M = np.block([[Jd, U[:, -1:]], [Vt[-1:], np.zeros((1, 1))]])
+            M = np.block([[Jd, left[:, None]], [right[None, :], np.zeros((1, 1))]])
             rhs = np.zeros(k + 1)
             rhs[-1] = 1.0
             vg, wh = np.linalg.solve(M, rhs), np.linalg.solve(M.T, rhs)
@@ -146,8 +160,11 @@ class EquilibriumProblem(continuation.Problem):
         if not idx:
             return np.nan, np.full(len(u), np.nan)
         chosen = vals[idx]
-        V = _invariant_basis(Jd, chosen)  # orthonormal bases of the right and left invariant subspaces:
-        L = _invariant_basis(Jd.T, chosen)  # well conditioned where the pair's eigenvectors merge (BT)
+        try:
+            V = _invariant_basis(Jd, chosen)  # orthonormal bases of the right and left invariant subspaces:
+            L = _invariant_basis(Jd.T, chosen)  # well conditioned where the pair's eigenvectors merge (BT)
+        except np.linalg.LinAlgError:
+            return np.nan, np.full(len(u), np.nan)
         W = L @ np.linalg.inv(V.T @ L)  # W^T V = I: the spectral projector is V W^T
         weight = 1.0 / len(idx)  # lambda_0, or the mean of the pair
         dvalue = weight * np.einsum("ia,ijk,ja->k", W, T2d, V).real  # tr(W^T dJ V) per tensor argument
@@ -179,8 +196,7 @@ class EquilibriumProblem(continuation.Problem):
                     out["line_saddle_change"] = nf["a"] * nf["b"]
                     out["line_focus_node"] = nf["k"] ** 2 + 4 * nf["a"] * nf["b"]
         else:
-            by_size = ev[np.argsort(np.abs(ev))]
-            out["bogdanov_takens"] = float(by_size[1].real)  # the second eigenvalue through 0 (the trace at BT)
+            out["bogdanov_takens"] = float(np.prod(others).real)  # a second real eigenvalue through 0
             out["zero_hopf"] = float(np.prod(others[i] + others[j]).real)
             nf = self.describe("fold_or_bp", point.u)
             if self.family is None:
@@ -196,9 +212,23 @@ class EquilibriumProblem(continuation.Problem):
         return self.tests(point).get(kind, np.nan)
 
     def accept(self, kind, point, value, options) -> bool:
+        """Curves: a zero of the double-Hopf or zero-Hopf test is the special point only if the other
+        eigenvalues hold a complex pair (resp. a real eigenvalue) on the axis there, not a real pair
+        s, -s (a neutral saddle) or a complex pair with s_i + s_j = 0 off the axis."""
         if self.critical is None:
             return super().accept(kind, point, value, options)
-        return np.isfinite(value)
+        if not np.isfinite(value):
+            return False
+        ev = point.eigenvalues
+        others = np.delete(ev, self._critical_indices(ev))
+        tol = max(options.locate_tol, REAL_TOL * max(1.0, np.abs(ev).max()))
+        pair_on_axis = np.any((others.imag > tol) & (np.abs(others.real) <= tol))
+        real_at_zero = np.any(np.abs(others) <= tol)
+        if kind == "double_hopf" or (kind == "zero_hopf" and self.critical == "zero"):
+            return bool(pair_on_axis)
+        if kind == "zero_hopf" or (kind == "bogdanov_takens" and self.critical == "zero"):
+            return bool(real_at_zero)
+        return True
 
     # -- Problem interface
     def residual(self, u: np.ndarray) -> np.ndarray:
@@ -286,14 +316,24 @@ def _is_jordan_block(J: np.ndarray) -> bool:
 
 def _invariant_basis(J: np.ndarray, eigenvalues: np.ndarray) -> np.ndarray:
     """Orthonormal real basis of the invariant subspace of J belonging to ``eigenvalues`` (one real
-    eigenvalue, or a complex-conjugate or real pair), from an ordered real Schur decomposition."""
+    eigenvalue, or a complex-conjugate or real pair), from an ordered real Schur decomposition.
+
+    The eigenvalues Schur selects are matched to the targets by a threshold of half the distance from
+    the targets to the rest of the spectrum (robust where a pair merges into a Jordan block, whose
+    eigenvalues are only determined to sqrt(eps))."""
     targets = np.asarray(eigenvalues)
+    spectrum = np.linalg.eigvals(J)
+    dist = np.array([np.min(np.abs(np.concatenate([targets, np.conj(targets)]) - z)) for z in spectrum])
+    order = np.argsort(dist)
+    dim = 1 if len(targets) == 1 else 2
+    gap = dist[order[dim]] if len(spectrum) > dim else np.inf
+    threshold = 0.5 * (dist[order[dim - 1]] + gap)
 
     def selected(re, im=0.0):
         z = complex(re, im)
-        return bool(np.min(np.abs(targets - z)) <= 1e-8 * max(1.0, np.abs(targets).max())
-                    or np.min(np.abs(np.conj(targets) - z)) <= 1e-8 * max(1.0, np.abs(targets).max()))
+        return bool(np.min(np.abs(np.concatenate([targets, np.conj(targets)]) - z)) < threshold)
 
-    T, Z, sdim = schur(J, output="real", sort=selected)
-    dim = 1 if len(targets) == 1 else 2
-    return Z[:, :dim] if sdim >= dim else Z[:, :dim]
+    _T, Z, sdim = schur(J, output="real", sort=selected)
+    if sdim != dim:
+        raise np.linalg.LinAlgError(f"ordered Schur form selected {sdim} eigenvalues, not {dim}")
+    return Z[:, :dim]

@@ -25,11 +25,13 @@ mode, r = |z|), to second order:
   k = Re kappa, kappa = (1/2 pi) int <p, N(q e^{i theta} + c.c.)> e^{-i theta} d theta, the
   resonant (first Fourier) part of N: z' contains kappa |z| z. For a smooth field k = 0 and the
   cubic l1 decides, as in the classical case; here the C^1 term dominates it.
-* real eigenvalue through 0: s' = b z^2, z' = a s z + c z^2 + k z |z|, with a = p . B(phi0, q),
-  b = psi0 . B(q, q) / 2, c = p . B(q, q) / 2, k = p . N(q) (dual bases of the kernel {phi0, q}).
+* real eigenvalue through 0: s' = b z^2 + k0 z|z|, z' = a s z + c z^2 + k z |z|, with a = p . B(phi0, q),
+  b = psi0 . B(q, q) / 2, c = p . B(q, q) / 2, k = p . N(q), k0 = psi0 . N(q) (dual bases of the kernel
+  {phi0, q}; the odd term does not average out of s' here as it does at a Hopf point).
 
-Dividing by r (or |z|) leaves the linear system (r, s)' = M (r, s), M = [[k, a], [b, 0]] (k + c and
-k - c on the two sides z > 0, z < 0 of the real case), which classifies the point:
+Dividing by r (or |z|) leaves the linear system (r, s)' = M (r, s), M = [[k, a], [b, 0]] (for the real
+case [[k + c, a], [b + k0, 0]] on the side z > 0 and [[k - c, a], [b - k0, 0]] on z < 0), which
+classifies the point:
 
 * a b > 0: **hyperbolic** (saddle): orbits near the line leave the neighbourhood;
 * a b < 0, k^2 + 4 a b < 0: **elliptic** (focus): an orbit leaving the line at s0 on the unstable
@@ -69,6 +71,7 @@ def _real_null(M: np.ndarray, transpose: bool = False) -> np.ndarray:
 def fold_coefficient(J: np.ndarray, B: np.ndarray) -> dict:
     """Quadratic coefficient a = 1/2 <p, B(q, q)> of a fold of an isolated equilibrium."""
     q = _real_null(J)
+    q = q * np.sign(q[np.argmax(np.abs(q))])  # orientation: the largest component positive (a's sign is q's)
     p = _real_null(J, transpose=True)
     p = p / (p @ q)
     return {"a": float(0.5 * p @ bilinear(B, q, q)), "q": q, "p": p}
@@ -149,7 +152,8 @@ def line_transcritical(J: np.ndarray, B: np.ndarray, phi0: np.ndarray, nonsmooth
     a = float(p @ bilinear(B, phi0, q))
     b = float(0.5 * psi0 @ bilinear(B, q, q))
     c = float(0.5 * p @ bilinear(B, q, q))
-    k = float(p @ nonsmooth(q)) if nonsmooth is not None else 0.0
-    return {"a": a, "b": b, "c": c, "k": k, "class": classify_line(a, b, k + c),
-            "class_negative": classify_line(a, b, k - c), "q": q, "p": p, "psi0": psi0,
+    N = nonsmooth(q) if nonsmooth is not None else np.zeros_like(q)
+    k, k0 = float(p @ N), float(psi0 @ N)
+    return {"a": a, "b": b, "c": c, "k": k, "k0": k0, "class": classify_line(a, b + k0, k + c),
+            "class_negative": classify_line(a, b - k0, k - c), "q": q, "p": p, "psi0": psi0,
             "smallest_singular_values": sv[-3:]}

@@ -278,8 +278,9 @@ def _special_table(br, prob, setup) -> dict:
         "special_index": ("special_point", np.array([sp.index for sp in sps], dtype=np.int32),
                           {"long_name": "index of the special point along dim point"}),
         "special_value": ("special_point", np.array([sp.value for sp in sps]),
-                          {"long_name": "test function at the located point (eigenvalue units for Hopf and "
-                                        "zero-eigenvalue points)"}),
+                          {"long_name": "test function at the located point: the critical eigenvalue's real part "
+                                        "[1/s] for Hopf and zero-eigenvalue points, the tangent component for folds, "
+                                        "the codimension-two test's own units otherwise"}),
         "special_class": ("special_point", np.array([CLASSES[sp.data.get("class", "")] for sp in sps], np.int8),
                           {"long_name": "normal-form class", "flag_values": np.array(list(CLASSES.values()), np.int8),
                            "flag_meanings": " ".join(k or "none" for k in CLASSES)}),

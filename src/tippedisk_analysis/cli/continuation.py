@@ -26,7 +26,8 @@ def _arguments(p) -> None:
     two.add_argument("--bounds", action="append", default=[], metavar="NAME=LOW:HIGH",
                      help="box the curve stays in (repeatable), e.g. --bounds eps=0.1:0.4")
     fixed = p.add_argument_group("fixed parameters (Tables 1-3, Sect. 6 defaults)")
-    fixed.add_argument("--omega", type=finite_float, help="spin rate [rad/s] when omega is not continued")
+    fixed.add_argument("--omega", type=finite_float, help="spin rate [rad/s] when omega is not continued "
+                                                          "(not with --from-point: the point fixes it)")
     fixed.add_argument("--eps", type=finite_float, help="smoothing of (2.29) [m/s] (0.1)")
     fixed.add_argument("--mu", type=finite_float, help="friction coefficient (0.3)")
     fixed.add_argument("--e", type=finite_float, help="eccentricity [m] (2.5e-3)")
@@ -63,10 +64,20 @@ def continue_(args) -> int:
     setup = Setup(disk=dataclasses.replace(Disk(), **({"e": args.e} if args.e is not None else {})),
                   friction=dataclasses.replace(Friction(), **friction))
     options = {"max_points": args.max_points}
+    if args.ds_max is not None and not args.ds_max > 0:
+        raise ParameterError(f"--ds-max {args.ds_max:g}: give a positive step, e.g. --ds-max 0.05")
     if args.from_point:
         path, _, label = args.from_point.rpartition(":")
         if not path or not label:
             raise ParameterError(f"--from-point {args.from_point!r} is not FILE:LABEL; give e.g. c.nc:HOPF1")
+        given = [f"--{name.replace('_', '-')}" for name in ("eps", "mu", "e", "omega", "start")
+                 if getattr(args, name) is not None] + (["--branch"] if args.branch != "inverted" else [])
+        if given:
+            raise ParameterError(f"{', '.join(given).replace('--start', '--from')} with --from-point: the point's "
+                                 "dataset fixes the branch and the parameters; drop them")
+        if args.parameters is not None and args.stop is not None:
+            raise ParameterError("--to with --parameters: a curve is bounded by --bounds NAME=LOW:HIGH; give "
+                                 "--parameter P --to X for a branch through the point instead")
         source = results.load(path)
         if args.parameters is None and args.stop is not None:  # a branch in --parameter through the point
             options["ds_max"] = args.ds_max or (0.2 if args.parameter == "omega" else 0.05)

@@ -14,6 +14,9 @@ def _arguments(p) -> None:
     p.add_argument("dataset", help="netCDF file written by tippedisk")
     p.add_argument("--output", "-o", help="figure file, format from the suffix (default: the dataset name with .png)")
     p.add_argument("--overwrite", action="store_true", help="replace an existing figure (refused without it)")
+    p.add_argument("--observable", help="continuation branches: the variable drawn against the parameter "
+                                        "(default max_real_eig; e.g. lambda_N, omega_x)")
+    p.add_argument("--over", metavar="MAP.nc", help="continuation curves: draw them over this stability map")
 
 
 @command("plot", "draw a stored dataset as a figure (PNG, PDF, SVG, ...)", _arguments)
@@ -29,6 +32,15 @@ def plot(args) -> int:
     if output.suffix.lower().lstrip(".") not in formats:
         raise ParameterError(f"cannot draw to {output.suffix or 'a file without suffix'!r}; give --output with one of "
                              f"{', '.join('.' + f for f in sorted(formats))}")
-    plotting.plot_dataset(ds, output)
+    options = {}
+    if args.observable is not None:
+        options["observable"] = args.observable
+    if args.over is not None:
+        background = results.load(args.over)
+        if background.attrs.get("kind") != "stability_map":
+            raise ParameterError(f"--over {args.over!r} is a {background.attrs.get('kind')} dataset; give a stability "
+                                 "map (tippedisk stability-map)")
+        options["background"] = background
+    plotting.plot_dataset(ds, output, **options)
     print(f"{show(output)}: {ds.attrs['kind']} figure")
     return 0

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import inspect
 from pathlib import Path
 
 import matplotlib
@@ -33,8 +34,11 @@ def file_formats() -> set[str]:
     return set(FigureCanvasBase.get_supported_filetypes())
 
 
-def plot_dataset(ds: xr.Dataset, path: str | Path) -> Path:
+def plot_dataset(ds: xr.Dataset, path: str | Path, **options) -> Path:
     """Draw ``ds`` with the figure function registered for its ``kind`` and save it (format from the suffix).
+
+    ``options`` go to the figure function (e.g. ``observable=`` and ``background=`` of continuation
+    figures); an option the kind's figure does not take is refused with DatasetError.
 
     The file is written like every output (:func:`tippedisk_analysis.files.atomic_write`). A dataset
     without samples (e.g. a run that became non-finite at once) is refused with DatasetError.
@@ -50,8 +54,12 @@ def plot_dataset(ds: xr.Dataset, path: str | Path) -> Path:
     if suffix not in file_formats():
         raise DatasetError(f"cannot draw to {path.suffix or 'a file without suffix'!r}; give one of "
                            f"{', '.join('.' + f for f in sorted(file_formats()))}")
+    accepted = inspect.signature(FIGURES[kind]).parameters
+    unknown = [name for name in options if name not in accepted]
+    if unknown:
+        raise DatasetError(f"figures of kind {kind!r} take no option {', '.join(unknown)}")
     try:
-        fig = FIGURES[kind](ds)
+        fig = FIGURES[kind](ds, **options)
     except KeyError as exc:
         plt.close("all")
         raise DatasetError(f"the {kind} dataset lacks {exc}; it is damaged or not one of ours") from None

@@ -6,6 +6,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 
+from ..errors import DatasetError
 from ..results import config_of
 from . import labels
 from .registry import figure
@@ -22,25 +23,36 @@ def _specials(ds: xr.Dataset):
 
 
 @figure("continuation")
-def continuation_figure(ds: xr.Dataset):
-    """A branch: max Re s and the eigenvalues' real parts against the parameter (stable solid, unstable dashed),
-    special points labelled. A curve: the two parameters, codimension-two points labelled."""
+def continuation_figure(ds: xr.Dataset, observable: str | None = None, background: xr.Dataset | None = None):
+    """A branch: ``observable`` (default max Re s) and the eigenvalues' real parts against the parameter
+    (stable solid, unstable dashed), special points labelled. A curve: the two parameters, codimension-two
+    points labelled, over an optional stability map ``background``."""
     parameters = ds.attrs.get("parameters", "omega").split()
     if len(parameters) == 2:
-        return curve_figure([ds])
+        if observable is not None:
+            raise DatasetError("--observable applies to branches, not to two-parameter curves")
+        return curve_figure([ds], background)
+    if background is not None:
+        raise DatasetError("a background stability map applies to two-parameter curves, not to branches")
+    observable = observable or "max_real_eig"
+    if observable not in ds.data_vars or ds[observable].dims != ("point",):
+        choices = sorted(v for v in ds.data_vars if ds[v].dims == ("point",))
+        raise DatasetError(f"no observable {observable!r} along the branch; choose one of {', '.join(choices)}")
     name = parameters[0]
     x = ds[name].values
+    y = ds[observable].values
     fig, axes = plt.subplots(2, 1, figsize=(8, 7), sharex=True, constrained_layout=True)
     ax = axes[0]
     stability = ds["stability"].values.copy()
     for i in np.flatnonzero(stability == 1)[::-1]:  # special points (marginal) take the style of the next run
         stability[i] = stability[i + 1] if i + 1 < len(stability) else stability[i - 1]
-    for xs, ys, flag in labels.runs(x, ds["max_real_eig"].values, stability):
+    for xs, ys, flag in labels.runs(x, y, stability):
         ax.plot(xs, ys, labels.STABILITY_STYLE[flag], color="k", lw=1.4)
-    ax.axhline(0.0, color="0.6", lw=0.8)
-    ax.set_yscale("symlog", linthresh=0.1)
-    ax.set(ylabel=r"max Re $s$ [1/s]", title=f"{config_of(ds).get('branch', '')} branch: stable solid, "
-                                               "unstable dashed")
+    if observable == "max_real_eig":
+        ax.axhline(0.0, color="0.6", lw=0.8)
+        ax.set_yscale("symlog", linthresh=0.1)
+    ax.set(ylabel=labels.axis_label(observable, ds[observable].attrs.get("units", "")),
+           title=f"{config_of(ds).get('branch', '')} branch: stable solid, unstable dashed")
     ax2 = axes[1]
     for k in range(ds.sizes["eig"]):
         ax2.plot(x, ds["eig_real"].values[:, k], ".", ms=2)
@@ -48,10 +60,11 @@ def continuation_figure(ds: xr.Dataset):
     ax2.set_yscale("symlog", linthresh=0.1)
     ax2.set(xlabel=axis_label(name), ylabel=r"Re $s_k$ [1/s]")
     for k, (label, index) in enumerate(_specials(ds)):
-        for a, y in ((ax, ds["max_real_eig"].values[index]), (ax2, 0.0)):
-            a.plot(x[index], y, "o", color="tab:red", ms=5, zorder=3)
-        ax.annotate(label, (x[index], ds["max_real_eig"].values[index]), textcoords="offset points",
-                    xytext=(-14 if k % 2 else 4, 8 if k % 2 else -14), fontsize=8, color="tab:red")
+        for a, yy in ((ax, y[index]), (ax2, 0.0)):
+            a.plot(x[index], yy, "o", color="tab:red", ms=5, zorder=3)
+        ax.annotate(label, (x[index], y[index]), textcoords="offset points", xytext=(0, 8 + 11 * (k % 3)),
+                    ha="center", fontsize=8, color="tab:red",
+                    arrowprops={"arrowstyle": "-", "color": "tab:red", "lw": 0.5})
     fig.suptitle(_fixed_text(ds, parameters))
     return fig
 

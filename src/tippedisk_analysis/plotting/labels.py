@@ -25,6 +25,10 @@ NAMES = {
     "E_tot": r"$E_\mathrm{tot}$",
     "time": "time $t$",
     "inertia": "inertia scale",
+    "max_real_eig": r"max Re $s$",
+    "omega_x": r"$\omega_x$",
+    "omega_y": r"$\omega_y$",
+    "omega_z": r"$\omega_z$",
 }
 
 UNITS = {"rad s-1": "rad/s", "m s-1": "m/s", "s-1": "1/s", "m s-2": "m/s^2", "rad s-2": "rad/s^2", "1": "-",
