@@ -543,7 +543,7 @@ def check_memory(n_points: int) -> int:
 
 
 @dataclasses.dataclass(frozen=True)
-class BasinConfig:
+class BasinConfig(sweeps.Grid):
     """Basins over (one or) two initial values at fixed parameters (stored in the dataset, checked on resume)."""
 
     axes: dict  # INITIAL name -> [start, stop, n]
@@ -583,16 +583,9 @@ class BasinConfig:
             for v in (a, b):
                 initial_state(setup, {**self.initial, name: v})
 
-    def axis_values(self) -> dict[str, np.ndarray]:
-        return {k: np.linspace(*v) for k, v in self.axes.items()}
-
     @property
-    def shape(self) -> tuple[int, ...]:
-        return tuple(v[2] for v in self.axes.values())
-
-    @property
-    def n_points(self) -> int:
-        return int(np.prod(self.shape))
+    def grid_ranges(self) -> dict:
+        return self.axes
 
     def physical_setup(self) -> Setup:
         return _setup(self.setup, self.parameters)
@@ -608,14 +601,7 @@ class BasinConfig:
 def _validate_common(cfg) -> None:
     if not (math.isfinite(cfg.t_end) and cfg.t_end > 0):
         raise ParameterError(f"t_end = {cfg.t_end!r} s must be positive; give the maximum horizon, e.g. 60")
-    if not (math.isfinite(cfg.tol) and 0 < cfg.tol < 1):
-        raise ParameterError(f"tol = {cfg.tol!r} must lie in (0, 1); give e.g. 1e-10")
-    if not (0 < cfg.fall_angle < math.pi / 2):
-        raise ParameterError("fall_angle must lie in (0, pi/2) rad; give e.g. 0.1")
-    if int(cfg.chunk_size) != cfg.chunk_size or cfg.chunk_size < 1:
-        raise ParameterError(f"chunk_size = {cfg.chunk_size!r} must be a positive integer")
-    if cfg.batch_size not in (1, 2, 4, 8, 16):
-        raise ParameterError(f"batch_size = {cfg.batch_size!r}; give 1, 2, 4, 8 or 16 SIMD lanes")
+    sweeps.check_run_settings(cfg)
     recurrence_settings(cfg.t_end, cfg.recurrence)
     _setup(cfg.setup, cfg.parameters)  # ParameterError naming the fix
 

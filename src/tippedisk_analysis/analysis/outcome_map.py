@@ -75,7 +75,7 @@ SWEEPABLE = {
 
 
 @dataclasses.dataclass(frozen=True)
-class MapConfig:
+class MapConfig(sweeps.Grid):
     """Everything that determines an outcome map (stored in it, and checked on resume)."""
 
     ranges: dict  # swept name -> [start, stop, n], in the order of SWEEPABLE
@@ -119,14 +119,7 @@ class MapConfig:
         object.__setattr__(self, "window", window)
         if not (0 < self.threshold < 1):
             raise ParameterError(f"threshold = {self.threshold!r} must lie in (0, 1); give e.g. 0.9")
-        if not (math.isfinite(self.tol) and 0 < self.tol < 1):
-            raise ParameterError(f"tol = {self.tol!r} must lie in (0, 1); give e.g. 1e-10")
-        if not (0 < self.fall_angle < math.pi / 2):
-            raise ParameterError("fall_angle must lie in (0, pi/2) rad; give e.g. 0.1")
-        if int(self.chunk_size) != self.chunk_size or self.chunk_size < 1:
-            raise ParameterError(f"chunk_size = {self.chunk_size!r} must be a positive integer")
-        if self.batch_size not in (1, 2, 4, 8, 16):
-            raise ParameterError(f"batch_size = {self.batch_size!r}; give 1, 2, 4, 8 or 16 SIMD lanes")
+        sweeps.check_run_settings(self)
         if self.classify not in CLASSIFIERS:
             raise ParameterError(f"classify = {self.classify!r}; give one of {', '.join(CLASSIFIERS)}")
         if self.classify == "attractors":
@@ -136,16 +129,12 @@ class MapConfig:
             for v in (values[0], values[-1]) if name != "e" else values:
                 _point_setup(self.base_setup(), {name: v})
 
+    @property
+    def grid_ranges(self) -> dict:
+        return self.ranges
+
     def axes(self) -> dict[str, np.ndarray]:
-        return {k: np.linspace(v[0], v[1], v[2]) for k, v in self.ranges.items()}
-
-    @property
-    def shape(self) -> tuple[int, ...]:
-        return tuple(v[2] for v in self.ranges.values())
-
-    @property
-    def n_points(self) -> int:
-        return int(np.prod(self.shape))
+        return self.axis_values()
 
     def base_setup(self) -> Setup:
         s = self.setup

@@ -26,6 +26,7 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
+import math
 import logging
 import os
 import shutil
@@ -73,6 +74,36 @@ class Sweep:
     unit: str = "run"
     bytes_per_point: float = 0.0
     seconds_per_point: float = 0.0
+
+
+class Grid:
+    """Mixin of the grid configurations (outcome maps, basins): ``grid_ranges`` {name: [start, stop, n]}
+    gives the axis values (START:STOP:N, both ends included), the shape and the number of points."""
+
+    grid_ranges: dict
+
+    def axis_values(self) -> dict[str, np.ndarray]:
+        return {k: np.linspace(v[0], v[1], int(v[2])) for k, v in self.grid_ranges.items()}
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(int(v[2]) for v in self.grid_ranges.values())
+
+    @property
+    def n_points(self) -> int:
+        return int(np.prod(self.shape))
+
+
+def check_run_settings(cfg) -> None:
+    """The heyoka batch settings every grid configuration shares: tol, fall_angle, chunk_size, batch_size."""
+    if not (math.isfinite(cfg.tol) and 0 < cfg.tol < 1):
+        raise ParameterError(f"tol = {cfg.tol!r} must lie in (0, 1); give e.g. 1e-10")
+    if not (0 < cfg.fall_angle < math.pi / 2):
+        raise ParameterError("fall_angle must lie in (0, pi/2) rad; give e.g. 0.1")
+    if int(cfg.chunk_size) != cfg.chunk_size or cfg.chunk_size < 1:
+        raise ParameterError(f"chunk_size = {cfg.chunk_size!r} must be a positive integer")
+    if cfg.batch_size not in (1, 2, 4, 8, 16):
+        raise ParameterError(f"batch_size = {cfg.batch_size!r}; give 1, 2, 4, 8 or 16 SIMD lanes")
 
 
 def chunk_bounds(sweep: Sweep) -> list[tuple[int, int]]:
