@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -31,7 +32,10 @@ BAD = os.fsdecode(b"\xff-run.nc")  # a file name that is not UTF-8
 MAP = ["outcome-map", "--omega", "10:80:40", "--eps", "0.05:0.3:10", "--t-end", "3", "--chunk-size", "10"]
 
 
-def tippedisk(*args, cwd, timeout=120, runner=CLI) -> subprocess.CompletedProcess:
+SAFETY_TIMEOUT = 900  # [s] only ends a command that hangs; no test waits for a time to pass
+
+
+def tippedisk(*args, cwd, timeout=SAFETY_TIMEOUT, runner=CLI) -> subprocess.CompletedProcess:
     return subprocess.run([*runner, *map(str, args)], cwd=cwd, env=ENV, capture_output=True, timeout=timeout)
 
 
@@ -42,6 +46,18 @@ def _stderr(proc) -> str:
 def _snapshot(root: Path) -> dict:
     return {p.relative_to(root): hashlib.sha256(p.read_bytes()).hexdigest() if p.is_file() else "dir"
             for p in sorted(root.rglob("*"))}
+
+
+PROGRESS = re.compile(r"^[\w -]+:\s+\d+%\|")  # a tqdm bar, shown once work has run for 2 s
+
+
+def _message(err: str) -> str:
+    """The one line a command ends with; before it only progress-bar updates are allowed (a slow machine
+    shows the bar of a map that a fast one finishes first), never a traceback."""
+    lines = [line for line in err.replace("\r", "\n").splitlines() if line.strip()]
+    assert lines and "Traceback" not in err, err
+    assert all(PROGRESS.match(line) for line in lines[:-1]), err
+    return lines[-1]
 
 
 def _no_part_files(root: Path) -> None:
@@ -119,7 +135,7 @@ ROWS = [
 @pytest.mark.parametrize("args, status, fragment", [r[1:] for r in ROWS], ids=[r[0] for r in ROWS])
 def test_bad_input_one_line_nothing_written(ws, args, status, fragment):
     before = _snapshot(ws)
-    proc = tippedisk(*args, cwd=ws, timeout=60)
+    proc = tippedisk(*args, cwd=ws)
     after = _snapshot(ws)
     err = _stderr(proc)
     assert proc.returncode == status, err
@@ -170,7 +186,8 @@ def test_chunks_of_another_configuration_name_the_fix(tmp_path):
 def _concurrently(args, cwd, n=2):
     procs = [subprocess.Popen([*CLI, *args], cwd=cwd, env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
              for _ in range(n)]
-    return [(p.wait(timeout=120), p.stdout.read(), p.stderr.read()) for p in procs]
+    outputs = [p.communicate(timeout=SAFETY_TIMEOUT) for p in procs]
+    return [(p.returncode, out, err) for p, (out, err) in zip(procs, outputs)]
 
 
 @pytest.mark.parametrize("args", [
@@ -185,24 +202,50 @@ def test_two_writers_to_one_output_both_finish(tmp_path, args):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["c.nc"]  # no chunk directory, no temporary file
 
 
+class _Running:
+    """A command started in the background whose stderr is collected as it arrives."""
+
+    def __init__(self, args, cwd, runner=CLI):
+        self.proc = subprocess.Popen([*runner, *args], cwd=cwd, env=ENV, stdout=subprocess.PIPE,
+                                     stderr=subprocess.PIPE)
+        self._err = bytearray()
+        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._reader.start()
+
+    def _read(self):
+        while chunk := os.read(self.proc.stderr.fileno(), 4096):
+            self._err += chunk
+
+    @property
+    def stderr(self) -> str:
+        return bytes(self._err).decode("utf-8", "backslashreplace")
+
+
 def _interrupt(args, cwd, when, runner=CLI):
-    """Start the command, wait until ``when()`` is true, send SIGINT (as Ctrl-C), return (status, stderr)."""
-    proc = subprocess.Popen([*runner, *args], cwd=cwd, env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    t0 = time.monotonic()
-    while proc.poll() is None and not when() and time.monotonic() - t0 < 60:
+    """Start the command, wait for the event ``when(run)`` (a chunk file, a checkpoint, a progress line on
+    ``run.stderr``), send SIGINT as Ctrl-C does, return (status, stderr).
+
+    The trigger is an event the command produces, never elapsed time, so a cold heyoka cache or a loaded
+    machine only makes the test wait longer. SAFETY_TIMEOUT only ends a run that hangs."""
+    run = _Running(args, cwd, runner)
+    deadline = time.monotonic() + SAFETY_TIMEOUT
+    while run.proc.poll() is None and not when(run):
+        assert time.monotonic() < deadline, f"no trigger event within {SAFETY_TIMEOUT} s: {run.stderr}"
         time.sleep(0.02)
-    assert proc.poll() is None, "the run ended before it could be interrupted: make it longer"
-    proc.send_signal(signal.SIGINT)
-    _, err = proc.communicate(timeout=60)
-    return proc.returncode, err.decode()
+    assert run.proc.poll() is None, f"the run ended before it could be interrupted: make it longer. {run.stderr}"
+    run.proc.send_signal(signal.SIGINT)
+    run.proc.wait(timeout=SAFETY_TIMEOUT)
+    run._reader.join(timeout=SAFETY_TIMEOUT)
+    return run.proc.returncode, run.stderr
 
 
+@pytest.mark.slow
 def test_sigint_mid_outcome_map_resumes_bit_identically_and_recomputes_a_damaged_chunk(tmp_path):
     chunks = tmp_path / "m.nc.chunks"
-    code, err = _interrupt([*MAP, "-o", "m.nc"], tmp_path, lambda: len(list(chunks.glob("chunk_*.nc"))) >= 2)
-    assert code == 130 and err.count("\n") == 1 and "Traceback" not in err, err
-    assert err.startswith("tippedisk outcome-map: interrupted; ") and "of 40 chunks stored" in err
-    assert "rerun the same command to resume" in err
+    code, err = _interrupt([*MAP, "-o", "m.nc"], tmp_path, lambda run: len(list(chunks.glob("chunk_*.nc"))) >= 2)
+    message = _message(err)
+    assert code == 130 and message.startswith("tippedisk outcome-map: interrupted; "), err
+    assert "of 40 chunks stored" in message and "rerun the same command to resume" in message
     stored = sorted(chunks.glob("chunk_*.nc"))
     assert len(stored) >= 2 and not (tmp_path / "m.nc").exists()
     _no_part_files(tmp_path)
@@ -220,9 +263,10 @@ def test_sigint_mid_outcome_map_resumes_bit_identically_and_recomputes_a_damaged
 
 
 def test_sigint_before_the_first_chunk_leaves_nothing_that_blocks_other_settings(tmp_path):
-    code, err = _interrupt([*MAP, "-o", "m.nc"], tmp_path, lambda: (tmp_path / "m.nc.chunks").is_dir())
-    assert code == 130 and err.count("\n") == 1 and "Traceback" not in err, err
-    if "0 of 40 chunks stored" in err:  # interrupted before the first chunk: no directory is left behind
+    code, err = _interrupt([*MAP, "-o", "m.nc"], tmp_path, lambda run: (tmp_path / "m.nc.chunks").is_dir())
+    message = _message(err)
+    assert code == 130 and message.startswith("tippedisk outcome-map: interrupted; "), err
+    if "0 of 40 chunks stored" in message:  # interrupted before the first chunk: no directory is left behind
         assert not (tmp_path / "m.nc.chunks").exists()
     other = ["outcome-map", "--omega", "30:50:2", "--eps", "0.1:0.2:2", "--t-end", "0.2", "-o", "m.nc", "--overwrite"]
     assert tippedisk(*other, cwd=tmp_path).returncode == 0
@@ -231,20 +275,23 @@ def test_sigint_before_the_first_chunk_leaves_nothing_that_blocks_other_settings
 def test_sigint_mid_bifurcation_resumes(tmp_path):
     args = ["bifurcation", "--omega", "20:80:64", "--t-end", "6", "--t-transient", "4", "-o", "b.nc"]
     chunks = tmp_path / "b.nc.chunks"
-    code, err = _interrupt(args, tmp_path, lambda: any(chunks.glob("chunk_*.nc")))
-    assert code == 130 and err.count("\n") == 1 and "of 8 chunks stored" in err and "resume" in err, err
+    code, err = _interrupt(args, tmp_path, lambda run: any(chunks.glob("chunk_*.nc")))
+    message = _message(err)
+    assert code == 130 and "of 8 chunks stored" in message and "resume" in message, err
     proc = tippedisk(*args, cwd=tmp_path)
     assert proc.returncode == 0, _stderr(proc)
     ds = td.load(tmp_path / "b.nc")
     assert ds.sizes["omega"] == 64 and int(ds["n_crossings"].sum()) == ds.sizes["point"]
 
 
+@pytest.mark.slow
 def test_sigint_mid_stability_map(tmp_path):
-    args = ["stability-map", "--omega", "0:100:1000", "--eps", "0.02:0.5:400", "-o", "s.nc"]
-    t0 = time.monotonic()
-    code, err = _interrupt(args, tmp_path, lambda: time.monotonic() - t0 > 1.5)
-    assert code == 130 and err.count("\n") == 1 and "Traceback" not in err, err
-    assert "interrupted after" in err and "nothing stored" in err
+    """Interrupted once its progress bar shows (points computed): one line, nothing stored."""
+    args = ["stability-map", "--omega", "0:100:1000", "--eps", "0.02:0.5:1000", "-o", "s.nc"]
+    code, err = _interrupt(args, tmp_path, lambda run: "stability map:" in run.stderr)
+    message = _message(err)
+    assert code == 130 and message.startswith("tippedisk stability-map: interrupted after "), err
+    assert "nothing stored" in message
     assert list(tmp_path.iterdir()) == []
 
 
@@ -253,12 +300,14 @@ CHECKPOINT_EVERY_STEP = [sys.executable, "-c", (
     "from tippedisk_analysis.cli import main; sys.exit(main())")]
 
 
+@pytest.mark.slow
 def test_sigint_mid_moreau_run_resumes_bit_identically_from_its_checkpoint(tmp_path):
     args = ["simulate", "--model", "m2", "--t-end", "2", "-o", "m.nc"]
     checkpoint = tmp_path / "m.nc.checkpoint.npz"
-    code, err = _interrupt(args, tmp_path, checkpoint.exists, runner=CHECKPOINT_EVERY_STEP)
-    assert code == 130 and err.count("\n") == 1 and "Traceback" not in err, err
-    assert "interrupted; checkpoint at t = " in err and "rerun the same command to resume" in err
+    code, err = _interrupt(args, tmp_path, lambda run: checkpoint.exists(), runner=CHECKPOINT_EVERY_STEP)
+    message = _message(err)
+    assert code == 130 and "interrupted; checkpoint at t = " in message, err
+    assert "rerun the same command to resume" in message
     assert checkpoint.exists() and not (tmp_path / "m.nc").exists()
     _no_part_files(tmp_path)
     proc = tippedisk(*args, cwd=tmp_path, runner=CHECKPOINT_EVERY_STEP)
