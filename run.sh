@@ -1,16 +1,24 @@
 #!/usr/bin/env bash
 # Set up a virtual environment (.venv) with the package and its test tools, then
-#   bash run.sh demo   run the main job: the Table 3 simulation -> output/fig13_ode_inversion.{nc,png}
-#   bash run.sh test   run the test suite
+#   bash run.sh demo       run the main job: the Table 3 simulation -> output/fig13_ode_inversion.{nc,png}
+#   bash run.sh test       the test suite a developer runs in the loop (long checks marked slow left out)
+#   bash run.sh test-all   every test, slow checks included (what CI runs)
+# Extra arguments after test / test-all go to pytest.
 set -euo pipefail
 cd "$(dirname "$0")"
 PYTHON=${PYTHON:-python3}
 if [ ! -x .venv/bin/python ]; then
     "$PYTHON" -m venv .venv
 fi
-.venv/bin/python -m pip install --quiet --disable-pip-version-check -e ".[test]"
+# reinstall only when pyproject.toml changed (the install is editable: source changes need none)
+stamp=".venv/.installed-$(sha256sum pyproject.toml | cut -c1-16)"
+if [ ! -e "$stamp" ]; then
+    .venv/bin/python -m pip install --quiet --disable-pip-version-check -e ".[test]"
+    rm -f .venv/.installed-* && touch "$stamp"
+fi
 case "${1:-demo}" in
     demo) .venv/bin/tippedisk study fig13_ode_inversion --output-dir output ;;
     test) shift; .venv/bin/python -m pytest "$@" ;;
-    *) echo "usage: bash run.sh [demo|test [pytest args]]" >&2; exit 2 ;;
+    test-all) shift; .venv/bin/python -m pytest --slow "$@" ;;
+    *) echo "usage: bash run.sh [demo|test|test-all [pytest args]]" >&2; exit 2 ;;
 esac

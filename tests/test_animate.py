@@ -31,7 +31,7 @@ def _gif(path):
         return im.n_frames, im.size
 
 
-@pytest.mark.parametrize("which", ["ode_run", "moreau_quaternion_run"])
+@pytest.mark.parametrize("which", ["ode_run", pytest.param("moreau_quaternion_run", marks=pytest.mark.slow)])
 def test_cli_writes_the_frames_and_size_asked_for(which, request, tmp_path):
     ds = request.getfixturevalue(which)
     run, gif = tmp_path / "run.nc", tmp_path / "run.gif"

@@ -134,6 +134,7 @@ def test_first_lyapunov_coefficient_predicts_the_limit_cycle_by_simulation():
     assert r.max() - r.min() < 0.2 * r.mean()
 
 
+@pytest.mark.slow
 def test_nonsmooth_hopf_coefficient_predicts_a_c1_limit_cycle():
     """A C^1 Hopf point, w' = A w + (G w)|Gamma w|: the cycle radius grows linearly, |z| = -alpha / k."""
     omega, alpha = 1.0, 0.01
@@ -322,6 +323,7 @@ def test_zero_eigenvalue_point_is_a_repelling_node_and_orbits_leave_it(branch):
     assert float(branch.stability.where(np.abs(branch.omega - alpha_dot[-1]) < 0.5, drop=True).max()) == 0
 
 
+@pytest.mark.slow
 def test_hopf_and_zero_curves_bound_the_stable_window_as_the_stored_map_says():
     """Every critical spin speed of data/critical_speeds.nc (eps 0.14-0.36) lies on one of the curves to 1e-6."""
     stored = td.load(DATA / "critical_speeds.nc")

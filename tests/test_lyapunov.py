@@ -50,6 +50,7 @@ def test_bad_requests_are_one_line_errors():
         ly.MapConfig(omega=[10, 20, 2], eps=[0.0, 0.1, 2])
 
 
+@pytest.mark.slow
 def test_map_flags_falls_and_matches_single_runs(tmp_path):
     out = tmp_path / "map.nc"
     seen = []

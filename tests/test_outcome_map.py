@@ -43,6 +43,7 @@ def test_fast_point_preparation_matches_the_parameter_dataclasses():
         assert initial.alpha_dot == point["omega"] and initial.gamma == pytest.approx(-np.pi / 2 + point["dgamma0"])
 
 
+@pytest.mark.slow
 def test_batch_equals_scalar():
     """SIMD batch lanes (with lanes that fall and are shadowed) = one run at a time."""
     cfg = om.MapConfig(ranges=SMALL, **OPTS)
@@ -199,6 +200,7 @@ def test_cli_scheduler_address(tmp_path):
     xr.testing.assert_identical(on_cluster, load(out))
 
 
+@pytest.mark.slow
 def test_cli_unreachable_scheduler_exits_2_without_file(tmp_path, capsys):
     out = tmp_path / "m.nc"
     argv = ["outcome-map", "--omega", "30:50:2", "--eps", "0.1:0.2:2", "-o", str(out),

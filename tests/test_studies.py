@@ -4,6 +4,7 @@ import tippedisk_analysis as td
 from tippedisk_analysis.cli import main, study
 
 STUDIES = study.names()
+SLOW_STUDIES = {"basins", "continuation", "fig09_10_coulomb_contensou", "lyapunov_map", "periodic_orbits"}  # > 1 s
 
 
 def test_study_list_names_every_study_with_its_summary(capsys):
@@ -14,7 +15,8 @@ def test_study_list_names_every_study_with_its_summary(capsys):
     assert all(len(line.split()) > 1 for line in lines)  # every study has a docstring summary
 
 
-@pytest.mark.parametrize("name", STUDIES)
+@pytest.mark.parametrize("name", [pytest.param(name, marks=pytest.mark.slow) if name in SLOW_STUDIES else name
+                                  for name in STUDIES])
 def test_every_study_runs_at_reduced_size(name, tmp_path):
     """Each study (``--quick``) writes datasets of ours and figures."""
     assert main(["study", name, "--quick", "--output-dir", str(tmp_path)]) == 0
