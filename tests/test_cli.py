@@ -163,7 +163,8 @@ def test_interrupt_in_process_returns_130_with_one_line(tmp_path, capsys, monkey
 def test_help_texts_name_values_and_units(capsys):
     for argv in (["study", "--help"], ["bifurcation", "--help"], ["simulate", "--help"]):
         assert _exit_code(argv) == 0
-    out = capsys.readouterr().out
+    out = " ".join(capsys.readouterr().out.split())
     assert "fig13_ode_inversion" in out  # study --help lists the studies
-    assert "which crossings of the section count" in out and "one of x, y, z, alpha" in out
+    assert "which crossings of the section count" in out and "one of x, y, alpha, beta, gamma, x_dot" in out
+    assert "W_friction, z, z_dot, alpha_dot" in out
     assert "rate alpha_dot(0) = spin Omega [rad/s]" in out and "Euler angle beta(0), inclination [rad]" in out

@@ -33,6 +33,48 @@ def test_contact_constraint_holds(table3_euler, table3_quaternion):
         assert float(ds.lambda_N.min()) > 0  # the contact stays closed: bilateral model valid
 
 
+@pytest.fixture(scope="module")
+def lagrangian_run():
+    """The independent Lagrangian model (4.10) integrated by scipy's DOP853 over 1 s of the Table 3 run
+    (rtol = atol = 1e-12), with z integrated as a coordinate: its state (x, y, z, alpha, beta, gamma) and rates."""
+    from scipy.integrate import solve_ivp
+
+    init = td.InitialState()
+    rest = kin.rest_contact_state(DISK.r, init.euler, init.euler_rates)
+    y0 = np.concatenate([[init.x, init.y, rest["z"]], init.euler, rest["v_G"], init.euler_rates])
+    grid = np.linspace(0.0, 1.0, 101)
+    sol = solve_ivp(LagrangeModel(SETUP).rhs, (0.0, 1.0), y0, method="DOP853", rtol=1e-12, atol=1e-12, t_eval=grid)
+    assert sol.success
+    return dict(zip(("x", "y", "z", "alpha", "beta", "gamma"), sol.y[:6]))
+
+
+@pytest.mark.parametrize("model", ["ode-euler", "ode-quaternion"])
+def test_trajectory_matches_the_independent_lagrangian_model(lagrangian_run, model):
+    """Both ODE models (z = r sin(beta) built in) follow the Lagrangian model (z a coordinate, the contact
+    kept on acceleration level) along the first second of Table 3 to the integrators' accuracy."""
+    ds = td.simulate(model, 1.0, dt_output=0.01)
+    for name in ("alpha", "beta", "gamma"):
+        assert np.max(np.abs(ds[name].values - lagrangian_run[name])) < 3e-11, name
+    for name in ("x", "y", "z"):
+        assert np.max(np.abs(ds[name].values - lagrangian_run[name])) < 1e-12, name
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("model", ["ode-euler", "ode-quaternion"])
+def test_contact_and_energy_balance_hold_for_2000_s(model):
+    """The contact is built into the coordinates, so it cannot drift: over 2000 s of the Table 3 run (414,650
+    Taylor steps of ODE Model 1) the stored height of G stays r sin(beta) of the stored angle and the normal
+    velocity at C1 zero to round-off, while friction dissipates most of the energy."""
+    ds = td.simulate(model, 2000.0, dt_output=1.0)
+    assert ds.attrs["status"] == "completed"
+    assert float(np.max(np.abs(ds.z - DISK.r * np.sin(ds.beta)))) <= 1e-12  # g_N1 (2.12) from the stored values
+    assert float(np.max(np.abs(ds.gamma_N1))) <= 1e-12
+    assert float(np.max(np.abs(ds.E_tot - ds.E_tot[0] - ds.W_friction))) <= 1e-9
+    assert float(ds.W_friction[-1]) < -0.3  # 0.38 J -> 0.04 J: a long run that really moves
+    if "quaternion_norm_error" in ds:
+        assert float(np.max(np.abs(ds.quaternion_norm_error))) <= 1e-12
+
+
 def test_quaternion_norm_is_kept(table3_quaternion):
     assert float(abs(table3_quaternion.quaternion_norm_error).max()) < 1e-12
 
@@ -98,16 +140,20 @@ def _manifold_states(n, seed=3):
     return states, np.array(slips)
 
 
+OUTPUTS = ("lambda_N", "slip_x", "slip_y", "z", "z_dot")
+
+
 def _ode_rhs(model):
-    """Compiled right-hand side and lambda_N of ``model`` at a batch of states."""
+    """Compiled right-hand side and the OUTPUTS of ``model`` at a batch of states: a dict of columns."""
     variables, sys, _fall, outputs = ode.system(model)
-    names = [f for _, f in sys] + [outputs[ode.OUTPUT_NAMES.index(k)] for k in ("lambda_N", "slip_x", "slip_y")]
+    names = [f for _, f in sys] + [outputs[ode.OUTPUT_NAMES.index(k)] for k in OUTPUTS]
     cf = hy.cfunc(names, variables)
     pars = ode.parameter_vector(SETUP)
+    keys = [f"d_{name}" for name in model.state_names] + list(OUTPUTS)
 
     def evaluate(states):
         values = cf(np.ascontiguousarray(np.array(states).T), pars=np.repeat(pars[: cf.nparams, None], len(states), 1))
-        return values.T
+        return [dict(zip(keys, column)) for column in values.T]
 
     return evaluate
 
@@ -120,23 +166,36 @@ def _lagrange_reference(r_OG, euler, v_G, omega):
     return q_dd, lambda_N, phi_dot
 
 
+def _column(values, *names):
+    return np.array([values[name] for name in names])
+
+
+def _check_position_and_translation(value, r_OG, v_G, q_dd, scale=1.0):
+    """The contact fixes z and z_dot (outputs); x, y move with v_G and accelerate as the Lagrangian model."""
+    assert value["z"] == pytest.approx(r_OG[2], rel=1e-14)  # z = r sin(beta) (2.12)
+    assert value["z_dot"] == pytest.approx(v_G[2], rel=1e-12, abs=1e-15)  # gamma_N1 = 0
+    np.testing.assert_allclose(_column(value, "d_x", "d_y"), v_G[:2], rtol=1e-14)
+    np.testing.assert_allclose(_column(value, "d_x_dot", "d_y_dot"), q_dd[:2], rtol=1e-8, atol=1e-9 * scale)
+
+
 def test_rhs_matches_independent_lagrangian_model():
     """ODE Model 1: Newton-Euler about S (heyoka) against M q_dd - h = f_g + W_NT lambda_N, (3.11)/(4.10), in numpy."""
     states, slips = _manifold_states(12)
-    rows = [[*r, *phi, *v, *w, 0.0] for r, phi, v, w in states]
+    rows = [[*r[:2], *phi, *v[:2], *w, 0.0] for r, phi, v, w in states]
     values = _ode_rhs(ode.EULER)(rows)
-    assert np.all(np.isfinite(values))
-    np.testing.assert_allclose(values[:, 14:16], slips, rtol=1e-6, atol=1e-15)  # (3.27): the slip we built in
+    assert all(np.all(np.isfinite(list(v.values()))) for v in values)
+    np.testing.assert_allclose([_column(v, "slip_x", "slip_y") for v in values], slips, rtol=1e-6, atol=1e-15)
     for (r_OG, phi, v_G, omega), value in zip(states, values):
         q_dd, lambda_N, phi_dot = _lagrange_reference(r_OG, phi, v_G, omega)
-        np.testing.assert_allclose(value[:3], v_G, rtol=1e-14)  # r_dot = v_G
-        np.testing.assert_allclose(value[3:6], phi_dot, rtol=1e-12, atol=1e-12)  # (3.8)
-        np.testing.assert_allclose(value[6:9], q_dd[:3], rtol=1e-8, atol=1e-9)  # a_G
+        _check_position_and_translation(value, r_OG, v_G, q_dd)
+        np.testing.assert_allclose(_column(value, "d_alpha", "d_beta", "d_gamma"), phi_dot, rtol=1e-12,
+                                   atol=1e-12)  # (3.8)
         h = 1e-6  # omega_dot = d/dt omega(beta, gamma, phi_dot) along (phi_dot, phi_dd)
         plus = kin.omega_from_euler_rates(phi[1] + h * phi_dot[1], phi[2] + h * phi_dot[2], phi_dot + h * q_dd[3:])
         minus = kin.omega_from_euler_rates(phi[1] - h * phi_dot[1], phi[2] - h * phi_dot[2], phi_dot - h * q_dd[3:])
-        np.testing.assert_allclose(value[9:12], (plus - minus) / (2 * h), rtol=1e-6, atol=1e-5)
-        assert value[13] == pytest.approx(lambda_N, rel=1e-9)
+        np.testing.assert_allclose(_column(value, "d_omega_x", "d_omega_y", "d_omega_z"), (plus - minus) / (2 * h),
+                                   rtol=1e-6, atol=1e-5)
+        assert value["lambda_N"] == pytest.approx(lambda_N, rel=1e-9)
 
 
 def _skew(a):
@@ -152,21 +211,21 @@ def test_quaternion_rhs_matches_independent_lagrangian_model():
     lambda_N equal, and p_dot (3.44) moves R(p) as R Omega~ (Poisson's equation).
     """
     states, slips = _manifold_states(12, seed=5)
-    rows = [[*r, *kin.quaternion_from_rotation(kin.rotation_from_euler(*phi)), *v, *w, 0.0]
+    rows = [[*r[:2], *kin.quaternion_from_rotation(kin.rotation_from_euler(*phi)), *v[:2], *w, 0.0]
             for r, phi, v, w in states]
     values = _ode_rhs(ode.QUATERNION)(rows)
-    assert np.all(np.isfinite(values))
-    np.testing.assert_allclose(values[:, 15:17], slips, rtol=1e-6, atol=1e-15)  # (3.27): the slip we built in
+    assert all(np.all(np.isfinite(list(v.values()))) for v in values)
+    np.testing.assert_allclose([_column(v, "slip_x", "slip_y") for v in values], slips, rtol=1e-6, atol=1e-15)
     for (r_OG, phi, v_G, omega), row, value in zip(states, rows, values):
         q_dd, lambda_N, phi_dot = _lagrange_reference(r_OG, phi, v_G, omega)
         scale = 1.0 + np.abs(q_dd).max()
-        np.testing.assert_allclose(value[:3], v_G, rtol=1e-14)
-        np.testing.assert_allclose(value[7:10], q_dd[:3], rtol=1e-8, atol=1e-9 * scale)  # a_G
+        _check_position_and_translation(value, r_OG, v_G, q_dd, scale)
         J_R = np.array(kin.omega_entries_from_euler_rates(phi[1], phi[2], *np.eye(3)))  # (3.3) columns
         psi = J_R @ q_dd[3:] + np.array(kin.omega_derivative_entries_at_fixed_rates(phi[1], phi[2], *phi_dot))
-        np.testing.assert_allclose(value[10:13], psi, rtol=1e-8, atol=1e-9 * scale)  # omega_dot
-        assert value[14] == pytest.approx(lambda_N, rel=1e-9)
-        p, p_dot, h = np.array(row[3:7]), value[3:7], 1e-6
+        np.testing.assert_allclose(_column(value, "d_omega_x", "d_omega_y", "d_omega_z"), psi, rtol=1e-8,
+                                   atol=1e-9 * scale)  # omega_dot
+        assert value["lambda_N"] == pytest.approx(lambda_N, rel=1e-9)
+        p, p_dot, h = np.array(row[2:6]), _column(value, "d_p0", "d_p1", "d_p2", "d_p3"), 1e-6
         R_dot = (kin.rotation_from_quaternion(p + h * p_dot) - kin.rotation_from_quaternion(p - h * p_dot)) / (2 * h)
         np.testing.assert_allclose(R_dot, kin.rotation_from_euler(*phi) @ _skew(omega), atol=1e-7 * (1 + abs(omega).max()))
 

@@ -95,8 +95,8 @@ def test_stored_runs_match_the_current_code(runs, key):
     assert config_of(stored)["setup"] == config_of(fresh)["setup"]
     assert {k: v for k, v in config_of(stored)["integrator"].items() if k != "t_end"} == \
         {k: v for k, v in config_of(fresh)["integrator"].items() if k != "t_end"}
-    for name in fresh.data_vars:
-        scale = max(float(np.max(np.abs(stored[name].values))), 1e-300)
+    for name in fresh.data_vars:  # quantities at round-off (g_N1 of the ODE models: zero by construction) meet 1e-15
+        scale = max(float(np.max(np.abs(stored[name].values))), 1e-9)
         np.testing.assert_allclose(stored[name].values, fresh[name].values, rtol=1e-5, atol=1e-6 * scale, err_msg=name)
 
 

@@ -1,6 +1,6 @@
 """The tippedisk as a problem of the recurrence core (:mod:`.attractors`): attractors of ODE Model 1.
 
-Runs integrate ODE Model 1 (Sect. 4.1, the full 13-state Euler-angle model of
+Runs integrate ODE Model 1 (Sect. 4.1, the full Euler-angle model of
 :mod:`tippedisk_analysis.models.ode`) in heyoka batch mode and are observed through the symmetry-invariant
 projection (beta, gamma mod 2 pi, alpha_dot, beta_dot, gamma_dot): x, y, alpha are cyclic, so a spinning
 solution (a relative equilibrium of the full model) is a fixed point of the projection, and the
@@ -114,7 +114,7 @@ def evaluate_observables(states, pars) -> dict[str, np.ndarray]:
 
 
 def reduced_of(states) -> np.ndarray:
-    """Reduced states (7, N) of model states (13, N)."""
+    """Reduced states (7, N) of model states (11, N)."""
     x = np.asarray(states, dtype=float).reshape(len(MODEL.state_names), -1)
     i = {n: k for k, n in enumerate(MODEL.state_names)}
     return reduced_from_full(x[i["alpha"]], x[i["beta"]], x[i["gamma"]], x[i["x_dot"]], x[i["y_dot"]],
@@ -246,7 +246,7 @@ class TippediskProblem(at.Problem):
         if eig > 0:  # linearly unstable: the run passes a saddle slowly; it is a transient
             return None
         segment = stable_segment(branch, omega, pars)
-        full = full_from_reduced(x, float(pars[ode.PARAMETER_NAMES.index("r")]))
+        full = full_from_reduced(x)
         return {"state": full, "branch": st.branch_sign(branch), "omega": omega, "omega_min": omega,
                 "omega_max": omega, "max_real_eig": eig, "stationary_deviation": dev, "energy_drift": 0.0,
                 "segment_min": segment[0], "segment_max": segment[1]}
@@ -303,7 +303,7 @@ class TippediskProblem(at.Problem):
                         self.grid.names else desc.extra["omega"], desc.extra["segment_min"]), desc.extra["segment_max"])
         member = st.stationary_state(branch, [omega])[:, 0]
         pars = ode.parameter_vector()  # the projection of a state does not depend on the parameters
-        y_member = self.observe(full_from_reduced(member, float(pars[ode.PARAMETER_NAMES.index("r")]))[:, None], pars)
+        y_member = self.observe(full_from_reduced(member)[:, None], pars)
         return float(np.max(np.abs(self.grid.difference(observed, y_member[:, 0]))))
 
 
@@ -345,7 +345,7 @@ POINT_VARIABLES = {
 
 def run_points(x0, pars, groups, *, tol: float, batch_size: int, horizon: float, recurrence: dict | None,
                key_base: int) -> dict[str, np.ndarray]:
-    """Map initial states (13, N) of ODE Model 1 to attractors; per-point arrays for a sweep chunk
+    """Map initial states (11, N) of ODE Model 1 to attractors; per-point arrays for a sweep chunk
     (:data:`POINT_VARIABLES`, the core's ``att_*`` description columns, ``att_key``, ``t_assign``)."""
     prob = problem(float(tol))
     res = at.map_points(prob, recurrence_settings(horizon, recurrence), x0, pars, groups, int(batch_size))
@@ -509,7 +509,7 @@ SPECIAL_ORDER = ("undecided", "left_grid", "failed", "fell", "lift_off")
 
 
 def initial_state(setup: Setup, values: dict) -> np.ndarray:
-    """Model state (13,) of initial values {INITIAL name: value} (the rest from Table 3)."""
+    """Model state (11,) of initial values {INITIAL name: value} (the rest from Table 3)."""
     kw = {}
     for name, v in values.items():
         field = INITIAL[name][2]

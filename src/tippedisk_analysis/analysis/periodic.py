@@ -1645,7 +1645,7 @@ def tippedisk_lyapunov_orbit(setup, branch: str = "inverted", omega: float = 40.
 
 def tippedisk_full_model_check(orbit: PeriodicOrbit, setup, *, tol: float = TAYLOR_TOL,
                                section: str = "beta_dot=0") -> dict:
-    """An orbit of the reduced tippedisk checked with ODE Model 1 (13 states): the lifted initial state
+    """An orbit of the reduced tippedisk checked with ODE Model 1 (11 states): the lifted initial state
     (:func:`.reduced.full_from_reduced`) integrated over one period returns to the orbit (``return_error``:
     max |x(T) - x_0| / scale of the reduced states), and the period equals the return time of the section
     crossings located by :mod:`.poincare`'s event integrator (``section_period``)."""
@@ -1659,7 +1659,7 @@ def tippedisk_full_model_check(orbit: PeriodicOrbit, setup, *, tol: float = TAYL
     from . import poincare, reduced
 
     x0 = orbit.states[0]
-    full0 = reduced.full_from_reduced(x0, setup.disk.r)
+    full0 = reduced.full_from_reduced(x0)
     tr = taylor.integrate("ode-euler", setup, full0, orbit.period, orbit.period, tol, FALL_ANGLE, SLIP_SMOOTHING)
     names = ode.EULER.state_names
     end = {name: tr.states[-1, names.index(name)] for name in names}

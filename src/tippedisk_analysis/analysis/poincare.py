@@ -32,6 +32,7 @@ import xarray as xr
 from ..errors import ParameterError
 from ..defaults import FALL_ANGLE, SLIP_SMOOTHING, TAYLOR_TOL
 from ..models import ode
+from ..models.variables import quantities
 from ..parameters import InitialState, Setup, to_dict
 from ..results import describe, make_attrs
 
@@ -80,11 +81,6 @@ def parse_level(text: str) -> float:
     if not math.isfinite(value):
         raise ParameterError(f"section level {text!r} is not finite")
     return value
-
-
-def quantities(model_name: str = "ode-euler") -> tuple[str, ...]:
-    model = ode.MODELS[model_name]
-    return tuple(dict.fromkeys((*model.state_names, *ode.OUTPUT_NAMES)))
 
 
 def parse_section(spec: str, direction: str = "positive", model_name: str = "ode-euler") -> Section:

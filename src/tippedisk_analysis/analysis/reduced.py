@@ -1,15 +1,14 @@
 """The symmetry-reduced system of ODE Model 1: its right-hand side and exact derivatives.
 
 The ODE Model 1 state (Sect. 4.1, :mod:`tippedisk_analysis.models.ode`) is
-(x, y, z, alpha, beta, gamma, x_dot, y_dot, z_dot, omega_x, omega_y, omega_z, W_friction).
+(x, y, alpha, beta, gamma, x_dot, y_dot, omega_x, omega_y, omega_z, W_friction); the height of G
+and its rate follow from the contact, z = r sin(beta) and z_dot = r cos(beta) beta_dot.
 Its right-hand side does not depend on x, y (horizontal translation), alpha (rotation of
 the whole motion about e_z^I, (3.1)) nor W_friction (an integral of the friction power),
 so a spinning disk with alpha_dot = Omega is a *relative* equilibrium: alpha grows and
 v_G turns with the disk. The reduction used here:
 
 * drop x, y, alpha (cyclic) and W_friction (a quadrature);
-* z = r sin(beta) and z_dot = r cos(beta) beta_dot: the bilateral constraint g_N1 = 0
-  (2.12) and its derivative, which the acceleration-level constraint (4.9) keeps invariant;
 * express the horizontal velocity of G in the R-frame, I turned by alpha about e_z^I (3.1):
   u = (e_x^R . v_G, e_y^R . v_G), i.e. u_x = cos(alpha) x_dot + sin(alpha) y_dot,
   u_y = -sin(alpha) x_dot + cos(alpha) y_dot. Differentiating in the turning frame,
@@ -19,8 +18,8 @@ Reduced state (STATE_NAMES): (beta, gamma, u_x, u_y, omega_x, omega_y, omega_z),
 first-order equations. The right-hand side is *not* a second copy of the physics: it is
 :func:`tippedisk_analysis.models.ode.system` for ODE Model 1 with alpha = 0 substituted
 (where the R-frame and the I-frame coincide, so a_G in I equals a_G in R), x_dot -> u_x,
-y_dot -> u_y, z -> r sin(beta), z_dot -> r cos(beta) beta_dot, plus the turning-frame terms
-above; beta_dot, gamma_dot and alpha_dot are the inverse of (3.3) from the same module.
+y_dot -> u_y, plus the turning-frame terms above; beta_dot, gamma_dot and alpha_dot are the
+inverse of (3.3) from the same module.
 
 Derivatives are exact: heyoka differentiates the expressions symbolically (``hy.diff_tensors``)
 and compiles them once per process (``hy.cfunc``, cached on disk by heyoka): the Jacobian for
@@ -76,12 +75,8 @@ def reduced_system(split_slip_norm: bool = False) -> ReducedSystem:
     rhs_full = dict(zip(names, (rhs for _var, rhs in sys)))
     out = dict(zip(ode.OUTPUT_NAMES, outputs))
     beta, gamma, u_x, u_y, w_x, w_y, w_z = variables = hy.make_vars(*STATE_NAMES)
-    r = ode.P["r"]
-    _alpha_dot, beta_dot, _gamma_dot = kin.euler_rate_entries_from_omega(beta, gamma, w_x, w_y, w_z, xp=hy)
     subs = {
         "x": hy.expression(0.0), "y": hy.expression(0.0), "alpha": hy.expression(0.0),  # cyclic
-        "z": r * hy.sin(beta),  # g_N1 = 0 (2.12)
-        "z_dot": r * hy.cos(beta) * beta_dot,  # g_N1_dot = 0
         "x_dot": u_x, "y_dot": u_y,  # alpha = 0: R-frame = I-frame
         "W_friction": hy.expression(0.0),
     }
@@ -179,15 +174,12 @@ def reduced_from_full(alpha, beta, gamma, x_dot, y_dot, omega_x, omega_y, omega_
         len(STATE_NAMES), -1)
 
 
-def full_from_reduced(state, r: float, alpha: float = 0.0) -> np.ndarray:
+def full_from_reduced(state, alpha: float = 0.0) -> np.ndarray:
     """ODE Model 1 state (ode.EULER.state_names) from a reduced state (7,): x = y = 0, the given alpha,
-    z = r sin(beta), z_dot = r cos(beta) beta_dot (g_N1 = 0 and its derivative), v_G from u turned by
-    alpha (3.1), W_friction = 0. The inverse of :func:`reduced_from_full`."""
+    horizontal v_G from u turned by alpha (3.1), W_friction = 0. The inverse of :func:`reduced_from_full`."""
     beta, gamma, u_x, u_y, w_x, w_y, w_z = np.asarray(state, dtype=float)
-    beta_dot = w_x * np.cos(gamma) - w_y * np.sin(gamma)  # inverse of (3.3)
     ca, sa = np.cos(alpha), np.sin(alpha)
-    return np.array([0.0, 0.0, r * np.sin(beta), alpha, beta, gamma, ca * u_x - sa * u_y, sa * u_x + ca * u_y,
-                     r * np.cos(beta) * beta_dot, w_x, w_y, w_z, 0.0])
+    return np.array([0.0, 0.0, alpha, beta, gamma, ca * u_x - sa * u_y, sa * u_x + ca * u_y, w_x, w_y, w_z, 0.0])
 
 
 @functools.lru_cache(maxsize=None)

@@ -11,7 +11,7 @@ from .registry import command
 
 
 def _arguments(p) -> None:
-    from ..analysis.poincare import quantities
+    from ..models.variables import quantities
 
     p.add_argument("--omega", type=range_type("omega"), required=True,
                    help="START:STOP:N initial spin Omega [rad/s] (one run from Table 3 per value)")
