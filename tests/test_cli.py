@@ -168,3 +168,16 @@ def test_help_texts_name_values_and_units(capsys):
     assert "which crossings of the section count" in out and "one of x, y, alpha, beta, gamma, x_dot" in out
     assert "W_friction, z, z_dot, alpha_dot" in out
     assert "rate alpha_dot(0) = spin Omega [rad/s]" in out and "Euler angle beta(0), inclination [rad]" in out
+
+
+def test_help_and_version_import_no_heavy_library():
+    """`tippedisk --version` and every `--help` build the parser without numpy, xarray, heyoka, numba or
+    matplotlib (their imports cost most of a second; benchmarks/bench_startup.py times the processes)."""
+    import subprocess
+    import sys
+
+    code = ("import sys; from tippedisk_analysis.cli import build_parser; build_parser(); "
+            "print(' '.join(m for m in ('numpy', 'xarray', 'heyoka', 'numba', 'matplotlib', 'scipy') "
+            "if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == ""

@@ -9,10 +9,12 @@ from __future__ import annotations
 
 import math
 import numbers
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from .errors import ParameterError
+
+if TYPE_CHECKING:
+    import numpy as np
 
 
 def _rule(start: float, stop: float, n: int) -> str | None:
@@ -79,6 +81,8 @@ def check_range(value, name: str) -> tuple[float, float, int]:
 
 def check_axis(values, name: str) -> np.ndarray:
     """A 1-D grid of finite, strictly increasing values (the same rule for arrays)."""
+    import numpy as np  # imported here: the command line parses ranges before it needs numpy
+
     try:
         arr = np.atleast_1d(np.asarray(values, dtype=float))
     except (TypeError, ValueError):
@@ -93,4 +97,6 @@ def check_axis(values, name: str) -> np.ndarray:
 
 def range_values(text: str, name: str | None = None) -> np.ndarray:
     """The values of ``START:STOP:N`` (or of one number) as an array."""
+    import numpy as np
+
     return np.linspace(*parse_range(text, name))
