@@ -72,7 +72,7 @@ def main() -> None:
     if not args.skip_basin:
         n = args.n_basin
         bcfg = bs.BasinConfig(axes={"beta0": (1.2, 1.9, n), "dgamma0": (-3.1, 3.1, n)}, initial={"omega": 40.0})
-        print(f"basin map {n} x {n}: memory estimate {bs.memory_estimate(bcfg.n_points) / 2**20:.1f} MB")
+        print(f"basin map {n} x {n}: memory estimate {sweeps.estimate(bs.basin_sweep(bcfg))[0] / 2**20:.1f} MB")
         thr = timed(f"basins {n} x {n}, {args.workers} threads",
                     lambda: sweeps.run_sweep(bs.basin_sweep(bcfg), threads=args.workers, progress=False))
         print("   ", thr.attrs["message"])

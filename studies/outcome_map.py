@@ -9,8 +9,6 @@ Writes outcome_map.nc and outcome_map.png.
 import sys
 from pathlib import Path
 
-import numpy as np
-
 from tippedisk_analysis.analysis.outcome_map import outcome_map
 from tippedisk_analysis.plotting import plot_dataset
 

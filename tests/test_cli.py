@@ -91,6 +91,7 @@ def test_existing_output_needs_overwrite(tmp_path, capsys):
     out = tmp_path / "run.nc"
     argv = ["simulate", "--t-end", "0.05", "--output", str(out)]
     assert main(argv) == 0
+    capsys.readouterr()  # the first run's output (a compile notice on a cold heyoka cache)
     before = out.read_bytes()
     assert main(argv) == 2
     err = capsys.readouterr().err
@@ -131,10 +132,30 @@ def test_disk_options_reach_every_command(tmp_path):
         "b.nc": ["bifurcation", "--omega", "40:50:2", "--t-transient", "0.1", "--t-end", "0.3", *geo],
         "o.nc": ["outcome-map", "--omega", "40:50:2", "--eps", "0.1", "--t-end", "0.2", *geo],
         "s.nc": ["stability-map", "--omega", "30:40:3", "--eps", "0.1", *geo],
+        "ba.nc": ["basins", "--omega", "40", "--dgamma0", "0.1:0.2:2", "--t-end", "0.5", *geo],
+        "bf.nc": ["basin-fractions", "--over", "omega=30:40:2", "--dgamma0", "0.1:0.2", "--samples", "2",
+                  "--t-end", "0.5", *geo],
+        "c.nc": ["continue", "--from", "30", "--to", "31", "--eps", "0.25", "--max-points", "3", *geo],
+        "l.nc": ["lyapunov", "--t-end", "0.5", *geo],
+        "lm.nc": ["lyapunov", "--omega", "30:40:2", "--t-end", "0.5", *geo],
+        "po.nc": ["periodic-orbits", "--frictionless", "inverted:40", "--max-points", "2", *geo],
     }
     for name, argv in commands.items():
         assert main([*argv, "-o", str(tmp_path / name)]) == 0, name
         assert _disk(tmp_path / name) == drilled, name
+
+
+@pytest.mark.parametrize("argv, fragment", [
+    (["continue", "--from-point", "c.nc:HOPF1", "--mass", "0.5"], "--mass with --from-point"),
+    (["continue", "--parameter", "e", "--omega", "40", "--to", "0.003", "--disk", "geometry"],
+     "a continuation in e holds A, B, C about G fixed"),
+    (["periodic-orbits", "--system", "hopf", "--radius", "0.05"], "the orbit radius of a Hopf start is --hopf-radius"),
+    (["lyapunov", "--system", "lorenz", "--disk", "given"], "--disk belong(s) to the tippedisk"),
+])
+def test_disk_options_are_refused_where_the_disk_is_fixed_or_absent(tmp_path, capsys, argv, fragment):
+    assert main([*argv, "-o", str(tmp_path / "x.nc")]) == 2
+    err = capsys.readouterr().err
+    assert fragment in err and err.count("\n") == 1 and not (tmp_path / "x.nc").exists()
 
 
 def test_eccentricity_sweeps_say_what_they_hold(tmp_path):

@@ -48,12 +48,13 @@ def _snapshot(root: Path) -> dict:
             for p in sorted(root.rglob("*"))}
 
 
-PROGRESS = re.compile(r"^[\w -]+:\s+\d+%\|")  # a tqdm bar, shown once work has run for 2 s
+PROGRESS = re.compile(r"^([\w -]+:\s+\d+%\||tippedisk [\w-]+: note: compiling )")
+"""A tqdm bar (shown once work has run for 2 s) or the notice of a slow first compile (a cold heyoka cache)."""
 
 
 def _message(err: str) -> str:
-    """The one line a command ends with; before it only progress-bar updates are allowed (a slow machine
-    shows the bar of a map that a fast one finishes first), never a traceback."""
+    """The one line a command ends with; before it only progress-bar updates and compile notices are allowed
+    (a slow machine shows what a fast one finishes first), never a traceback."""
     lines = [line for line in err.replace("\r", "\n").splitlines() if line.strip()]
     assert lines and "Traceback" not in err, err
     assert all(PROGRESS.match(line) for line in lines[:-1]), err
@@ -105,6 +106,13 @@ ROWS = [
     ("bifurcation-1e8", ["bifurcation", "--omega", "20:80:100000000", "-o", "big.nc"], 2, "of memory"),
     ("stability-map-30000^2", ["stability-map", "--omega", "0:100:30000", "--eps", "0.02:0.5:30000", "-o", "big.nc"],
      2, "of memory"),
+    ("lyapunov-100000^2", ["lyapunov", "--omega", "10:80:100000", "--eps", "0.02:0.4:100000", "-o", "big.nc"], 2,
+     "use fewer grid points"),
+    ("basins-100000^2", ["basins", "--dgamma0=-3:3:100000", "--beta0", "1:2:100000", "-o", "big.nc"], 2,
+     "use fewer grid points"),
+    ("lyapunov-output-exists", ["lyapunov", "-o", "existing.nc"], 2, "exists; give --overwrite"),
+    ("periodic-orbits-output-exists", ["periodic-orbits", "--system", "hopf", "-o", "existing.nc"], 2,
+     "exists; give --overwrite"),
     ("simulate-ode-1e9-s", ["simulate", "--t-end", "1e9", "-o", "big.nc"], 2, "--dt-output"),
     ("simulate-moreau-1e6-s", ["simulate", "--model", "m2", "--t-end", "1e6", "-o", "big.nc"], 2, "--store-every"),
     ("poincare-1e12-s", ["poincare", "--t-end", "1e12", "-o", "big.nc"], 2, "--max-crossings"),

@@ -240,3 +240,18 @@ def test_validity_flag_marks_runs_whose_normal_force_turns_negative():
     first_negative = float(run.time[np.argmax(run.lambda_N.values < 0)])
     assert first_negative - 1e-4 <= lift_off[1] <= first_negative
     assert float(td.simulate("ode-euler", 1.0, initial=td.InitialState(alpha_dot=100.0)).lambda_N.min()) > 0
+
+
+def test_cli_says_why_runs_are_undecided_and_what_to_do(tmp_path, capsys):
+    """A horizon shorter than the time to a decision leaves runs undecided: the line says so and names the fix."""
+    out = tmp_path / "m.nc"
+    assert main(["outcome-map", "--omega", "30:50:2", "--eps", "0.1:0.2:2", "--t-end", "2", "-o", str(out)]) == 0
+    ds = load(out)
+    flags = dict(zip(ds.outcome.attrs["flag_meanings"].split(), ds.outcome.attrs["flag_values"]))
+    n = int((ds.outcome == flags["undecided"]).sum())
+    line = capsys.readouterr().out
+    assert n > 0 and f"{n} of 4 runs undecided: the horizon --t-end 2 s ended before they reached an attractor" in line
+    assert "give a longer --t-end, e.g. 60, or --classify rules" in line
+    assert main(["outcome-map", "--omega", "30:50:2", "--eps", "0.1:0.2:2", "--t-end", "2", "--classify", "rules",
+                 "-o", str(tmp_path / "r.nc")]) == 0
+    assert "undecided:" not in capsys.readouterr().out  # rules classify every run of fixed length

@@ -357,7 +357,9 @@ def test_cli_textbook_branch_and_tippedisk_no_orbit(tmp_path, capsys, inverted_b
     (["--from-hopf", "nolabel"], "FILE:LABEL"),
     (["--from-hopf", "missing.nc:HOPF1"], "does not exist"),
     (["--system", "lorenz"], "unknown system"),
-    (["--system", "bautin", "--radius", "-1"], "radius"),
+    (["--system", "bautin", "--hopf-radius", "-1"], "--hopf-radius -1 must be positive"),
+    (["--system", "bautin", "--radius", "0.05"], "the orbit radius of a Hopf start is --hopf-radius"),
+    (["--from-hopf", "c.nc:HOPF1", "--mass", "0.5"], "the disk options belong to --frictionless"),
 ])
 def test_cli_bad_input_exits_2_and_writes_nothing(tmp_path, capsys, args, fragment):
     from tippedisk_analysis.cli import main
@@ -381,7 +383,10 @@ def test_branch_continues_from_a_stored_orbit(tmp_path, capsys):
     assert main(["periodic-orbits", "--from-orbit", f"{first}:3", "--to", "0.1", "-o", str(out)]) == 0
     assert td.load(out).attrs["labels"] == "HOPF1"
     last = ds.sizes["point"] - 1  # from the large (stable) cycle: on to beta = 0.1
-    assert main(["periodic-orbits", "--from-orbit", f"{first}:{last}", "--to", "0.1", "-o", str(out)]) == 0
+    assert main(["periodic-orbits", "--from-orbit", f"{first}:{last}", "--to", "0.1", "-o", str(out)]) == 2
+    assert "exists; give --overwrite" in capsys.readouterr().err  # like every command that writes a file
+    assert main(["periodic-orbits", "--from-orbit", f"{first}:{last}", "--to", "0.1", "-o", str(out),
+                 "--overwrite"]) == 0
     more = td.load(out)
     assert float(more.beta[-1]) == pytest.approx(0.1) and (more.stability == 0).all()
     capsys.readouterr()

@@ -8,7 +8,6 @@ import xarray as xr
 import tippedisk_analysis as td
 from tippedisk_analysis.defaults import TAYLOR_TOL
 from tippedisk_analysis import results
-from tippedisk_analysis.solvers import taylor
 
 
 @pytest.fixture(scope="module")

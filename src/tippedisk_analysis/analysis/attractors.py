@@ -898,7 +898,6 @@ def chunk_result(problem: Problem, res: MapResult, start: int) -> dict[str, np.n
     within each group, and the description of each point's attractor as columns."""
     index = np.full(len(res.attractors), -1, dtype=np.int64)
     descs: list[Description] = []
-    key_of: list[int] = []
     for g in sorted({f.group for f in res.attractors}):
         members = [a for a, f in enumerate(res.attractors) if f.group == g]
         idx, merged = merge(problem, [res.attractors[a].description for a in members])

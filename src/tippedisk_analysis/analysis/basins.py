@@ -29,12 +29,12 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-import os
 
 import numpy as np
 import xarray as xr
 
-from ..defaults import BATCH_SIZE, FALL_ANGLE, MAP_TOL, MEMORY_FRACTION, SLIP_SMOOTHING
+from ..compilation import compiling
+from ..defaults import BATCH_SIZE, FALL_ANGLE, MAP_TOL, SLIP_SMOOTHING
 from ..errors import ParameterError
 from ..models import ode
 from ..parameters import Disk, Friction, InitialState, Setup, to_dict
@@ -85,10 +85,11 @@ def integrator(tol: float, batch_size: int):
     x0 = ode.initial_state_vector(MODEL, ode.Setup(), ode.InitialState())
     pars = ode.parameter_vector()
     neg, pos = hy.event_direction.negative, hy.event_direction.positive
-    return hy.taylor_adaptive_batch(
-        sys, np.repeat(x0[:, None], B, axis=1), pars=np.repeat(pars[:, None], B, axis=1), tol=tol,
-        t_events=[hy.t_event_batch(fall, direction=neg), hy.t_event_batch(lambda_N, direction=neg)],
-        nt_events=[hy.nt_event_batch(gamma, at.FirstTime(), direction=pos)])
+    with compiling(f"the ODE Model 1 batch integrator ({B} lanes, tol {tol:g})"):
+        return hy.taylor_adaptive_batch(
+            sys, np.repeat(x0[:, None], B, axis=1), pars=np.repeat(pars[:, None], B, axis=1), tol=tol,
+            t_events=[hy.t_event_batch(fall, direction=neg), hy.t_event_batch(lambda_N, direction=neg)],
+            nt_events=[hy.nt_event_batch(gamma, at.FirstTime(), direction=pos)])
 
 
 @functools.lru_cache(maxsize=1)
@@ -518,28 +519,19 @@ def initial_state(setup: Setup, values: dict) -> np.ndarray:
 
 
 def _setup(base: dict, params: dict) -> Setup:
+    """The stored setup with the parameters eps, mu, e set; e with what the disk holds fixed
+    (Disk.with_eccentricity: A, B, C about G, or the drilled disk's hole moves)."""
     s = Setup(Disk(**base["disk"]), Friction(**base["friction"]), base["gravity"])
     fric = {k: float(v) for k, v in params.items() if k in ("eps", "mu")}
-    disk = {k: float(v) for k, v in params.items() if k == "e"}
-    return dataclasses.replace(s, friction=dataclasses.replace(s.friction, **fric),
-                               disk=dataclasses.replace(s.disk, **disk))
+    disk = s.disk.with_eccentricity(float(params["e"])) if "e" in params else s.disk
+    return dataclasses.replace(s, friction=dataclasses.replace(s.friction, **fric), disk=disk)
 
 
-def memory_estimate(n_points: int) -> int:
-    """Bytes a sweep of n_points keeps: the per-point chunk columns, merged, plus the dataset."""
-    return int(n_points * (len(chunk_variables()) + len(POINT_VARIABLES) + 4) * 8 * 2)
-
-
-def check_memory(n_points: int) -> int:
-    need = memory_estimate(n_points)
-    try:
-        avail = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_AVPHYS_PAGES")
-    except (ValueError, OSError, AttributeError):  # pragma: no cover (non-POSIX)
-        return need
-    if need > MEMORY_FRACTION * avail:
-        raise ParameterError(f"{n_points} runs need about {need / 2**20:.0f} MB, more than {MEMORY_FRACTION:.0%} of the "
-                             f"{avail / 2**20:.0f} MB available; use fewer grid points or samples")
-    return need
+BYTES_PER_POINT = 8.0 * (len(chunk_variables()) + len(POINT_VARIABLES) + 4)
+"""Memory of one run's results in a basin sweep (sweeps.MERGE_FACTOR covers the copies at the merge)."""
+SECONDS_PER_RUN_SECOND = 1e-3
+"""Work of one run per simulated second on one core, batch 4 (benchmarks/bench_attractors.py); the horizon
+t_end bounds a run (most are assigned earlier), so estimates from it err on the long side."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -689,19 +681,21 @@ def assemble_basins(cfg: BasinConfig, results: dict) -> xr.Dataset:
 def basin_sweep(cfg: BasinConfig) -> sweeps.Sweep:
     return sweeps.Sweep("basins", cfg.to_dict(), cfg.n_points, int(cfg.chunk_size), chunk_variables(), basin_chunk,
                         functools.partial(assemble_basins, cfg),
-                        functools.partial(warm_up, float(cfg.tol), int(cfg.batch_size)))
+                        functools.partial(warm_up, float(cfg.tol), int(cfg.batch_size)),
+                        bytes_per_point=BYTES_PER_POINT, seconds_per_point=SECONDS_PER_RUN_SECOND * cfg.t_end)
 
 
 def basins(axes: dict, *, output=None, scheduler=None, threads: int | None = None, progress: bool = True,
-           **options) -> xr.Dataset:
+           overwrite: bool = False, **options) -> xr.Dataset:
     """Basins of attraction over ``axes`` ({INITIAL name: (start, stop, n)}, one or two) at fixed parameters.
 
     Options: the fields of :class:`BasinConfig` (initial, parameters, t_end, tol, ...). ``output``: netCDF
-    path, resumable chunks in ``<output>.chunks/``; ``scheduler``: dask address or ``local:N``.
+    path, resumable chunks in ``<output>.chunks/`` (``overwrite`` discards chunks of another configuration);
+    ``scheduler``: dask address or ``local:N``.
     """
     cfg = BasinConfig(axes=dict(axes), **options)
-    check_memory(cfg.n_points)
-    return sweeps.run_sweep(basin_sweep(cfg), output=output, scheduler=scheduler, threads=threads, progress=progress)
+    return sweeps.run_sweep(basin_sweep(cfg), output=output, scheduler=scheduler, threads=threads, progress=progress,
+                            overwrite=overwrite)
 
 
 # ------------------------------------------------ basin fractions continued over a parameter
@@ -842,15 +836,15 @@ def assemble_fractions(cfg: FractionsConfig, results: dict) -> xr.Dataset:
 def fractions_sweep(cfg: FractionsConfig) -> sweeps.Sweep:
     return sweeps.Sweep("basin fractions", cfg.to_dict(), cfg.n_points, int(cfg.chunk_size), chunk_variables(),
                         fractions_chunk, functools.partial(assemble_fractions, cfg),
-                        functools.partial(warm_up, float(cfg.tol), int(cfg.batch_size)))
+                        functools.partial(warm_up, float(cfg.tol), int(cfg.batch_size)),
+                        bytes_per_point=BYTES_PER_POINT, seconds_per_point=SECONDS_PER_RUN_SECOND * cfg.t_end)
 
 
 def basin_fractions(parameter: str, values, ranges: dict, *, output=None, scheduler=None, threads: int | None = None,
-                    progress: bool = True, **options) -> xr.Dataset:
+                    progress: bool = True, overwrite: bool = False, **options) -> xr.Dataset:
     """Basin fractions continued over ``parameter`` (values (start, stop, n)); ``ranges`` {INITIAL name:
     (low, high)} are sampled (``samples`` per value, ``seed``). Attractors are matched across the values
     (global continuation); continuing over an initial value (omega) they are shared outright."""
     cfg = FractionsConfig(parameter=parameter, values=list(values), ranges=dict(ranges), **options)
-    check_memory(cfg.n_points)
     return sweeps.run_sweep(fractions_sweep(cfg), output=output, scheduler=scheduler, threads=threads,
-                            progress=progress)
+                            progress=progress, overwrite=overwrite)

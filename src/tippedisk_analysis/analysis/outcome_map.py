@@ -48,6 +48,7 @@ import math
 import numpy as np
 import xarray as xr
 
+from ..compilation import compiling
 from ..defaults import (BATCH_SIZE, CHUNK_SIZE, FALL_ANGLE, MAP_TOL, OUTCOME_THRESHOLD, OUTCOME_WINDOW_FRACTION,
                         SLIP_SMOOTHING)
 from ..errors import ParameterError
@@ -218,12 +219,13 @@ def kernel(tol: float, batch_size: int = 4) -> BatchKernel:
     x0 = np.append(ode.initial_state_vector(model, Setup(), InitialState()), [0.0, 0.0])
     pars = ode.parameter_vector()
     pos, neg = hy.event_direction.positive, hy.event_direction.negative
-    batch = hy.taylor_adaptive_batch(
-        sys, np.repeat(x0[:, None], B, axis=1), pars=np.repeat(pars[:, None], B, axis=1), tol=tol,
-        t_events=[hy.t_event_batch(fall, direction=neg)],
-        nt_events=[hy.nt_event_batch(gamma, _FirstCrossing(), direction=pos),
-                   hy.nt_event_batch(lambda_N, _FirstCrossing(), direction=neg)])
-    return BatchKernel(batch, hy.cfunc(outputs, variables), B)
+    with compiling(f"the ODE Model 1 batch integrator of outcome maps ({B} lanes, tol {tol:g})"):
+        batch = hy.taylor_adaptive_batch(
+            sys, np.repeat(x0[:, None], B, axis=1), pars=np.repeat(pars[:, None], B, axis=1), tol=tol,
+            t_events=[hy.t_event_batch(fall, direction=neg)],
+            nt_events=[hy.nt_event_batch(gamma, _FirstCrossing(), direction=pos),
+                       hy.nt_event_batch(lambda_N, _FirstCrossing(), direction=neg)])
+        return BatchKernel(batch, hy.cfunc(outputs, variables), B)
 
 
 RESULT_VARIABLES = {
@@ -490,18 +492,17 @@ def sweep(config: MapConfig) -> sweeps.Sweep:
         return sweeps.Sweep("outcome map", config.to_dict(), config.n_points, int(config.chunk_size),
                             basins.chunk_variables(), run_chunk, functools.partial(assemble, config),
                             functools.partial(basins.warm_up, float(config.tol), int(config.batch_size)),
-                            bytes_per_point=8.0 * len(basins.chunk_variables()) + 16,
-                            seconds_per_point=SECONDS_PER_RUN_SECOND * config.t_end)
+                            bytes_per_point=basins.BYTES_PER_POINT,
+                            seconds_per_point=basins.SECONDS_PER_RUN_SECOND * config.t_end)
     return sweeps.Sweep("outcome map", config.to_dict(), config.n_points, int(config.chunk_size),
                         tuple(RESULT_VARIABLES), run_chunk, functools.partial(assemble, config),
                         functools.partial(kernel, float(config.tol), int(config.batch_size)),
-                        bytes_per_point=BYTES_PER_POINT, seconds_per_point=SECONDS_PER_RUN_SECOND * config.t_end)
+                        bytes_per_point=BYTES_PER_POINT,
+                        seconds_per_point=basins.SECONDS_PER_RUN_SECOND * config.t_end)
 
 
 BYTES_PER_POINT = sum(np.dtype(dtype).itemsize for dtype, _, _ in RESULT_VARIABLES.values())
 """Memory of one grid point's results (the dataset; sweeps.MERGE_FACTOR covers the copies at the merge)."""
-SECONDS_PER_RUN_SECOND = 1e-3
-"""Work of one run per simulated second on one core (measured 0.8 ms with the default tol, batch 4)."""
 
 
 # --- classification by attractors (classify="attractors", module docstring) ---

@@ -59,6 +59,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
+from ..compilation import compiling
 from ..errors import ParameterError
 from ..results import make_attrs
 from . import continuation, normal_forms
@@ -140,9 +141,11 @@ _LOCK = threading.Lock()
 
 
 def _cached(key, build):
+    """``build()`` once per process and key (a compile: announced when slow, :func:`..compilation.compiling`)."""
     with _LOCK:
         if key not in _CACHE:
-            _CACHE[key] = build()
+            with compiling(f"the {key[1]} integrators of {key[0]}"):
+                _CACHE[key] = build()
         return _CACHE[key]
 
 
@@ -162,8 +165,6 @@ def _templates(system: OdeSystem, tol: float, free: tuple = ()) -> _Templates:
     def build():
         import heyoka as hy
 
-        if hasattr(hy.llvm_state, "set_diskcache_enabled"):
-            hy.llvm_state.set_diskcache_enabled(True)
         sys = list(zip(system.variables, system.rhs))
         n_par = max(_n_params(system.rhs), max(free, default=-1) + 1)
         pars = np.zeros(n_par)

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
+from ..compilation import compiling
 from ..errors import ParameterError
 from ..defaults import FALL_ANGLE, SLIP_SMOOTHING, TAYLOR_TOL
 from ..models import ode
@@ -174,15 +175,16 @@ def section_integrator(model_name: str, quantity: str, modulo: bool, direction: 
               "any": hy.event_direction.any}[direction]
     setup, initial = Setup(), InitialState()
     pars = np.append(ode.parameter_vector(setup), 0.0)
-    ta = hy.taylor_adaptive(
-        sys, ode.initial_state_vector(model, setup, initial), pars=pars, tol=tol,
-        t_events=[hy.t_event(fall, direction=hy.event_direction.negative)],
-        nt_events=[hy.nt_event(g, _Recorder(), direction=hy_dir),
-                   hy.nt_event(outputs[ode.OUTPUT_NAMES.index("lambda_N")], _LiftOff(),
-                               direction=hy.event_direction.negative)],
-    )
-    q_index = model.state_names.index(quantity) if quantity in model.state_names else None
-    return SectionIntegrator(model, ta, hy.cfunc(outputs, variables), hy.cfunc([q], variables), q_index)
+    with compiling(f"the {model.paper_name} integrator with the section {quantity}"):
+        ta = hy.taylor_adaptive(
+            sys, ode.initial_state_vector(model, setup, initial), pars=pars, tol=tol,
+            t_events=[hy.t_event(fall, direction=hy.event_direction.negative)],
+            nt_events=[hy.nt_event(g, _Recorder(), direction=hy_dir),
+                       hy.nt_event(outputs[ode.OUTPUT_NAMES.index("lambda_N")], _LiftOff(),
+                                   direction=hy.event_direction.negative)],
+        )
+        q_index = model.state_names.index(quantity) if quantity in model.state_names else None
+        return SectionIntegrator(model, ta, hy.cfunc(outputs, variables), hy.cfunc([q], variables), q_index)
 
 
 @dataclass

@@ -37,7 +37,6 @@ from dataclasses import dataclass
 import heyoka as hy
 import numpy as np
 
-from .. import kinematics as kin
 from ..models import ode
 from .vector_fields import CompiledField
 

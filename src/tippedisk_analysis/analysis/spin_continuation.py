@@ -53,6 +53,10 @@ def _parameter(name: str, setup: Setup) -> Parameter:
     if name not in PARAMETERS:
         raise ParameterError(f"unknown continuation parameter {name!r}; choose one of {', '.join(PARAMETERS)}")
     scale = PARAMETERS[name][2]
+    if name in ("e", "inertia") and setup.disk.geometry is not None:
+        raise ParameterError(f"a continuation in {name} holds A, B, C about G fixed or scales them, which a drilled "
+                             "disk's geometry does not allow (its hole fixes them); give the disk by its values "
+                             "(Disk(m, e, r, A, B, C); --disk given or table2)")
     if name == "omega":
         return Parameter(name, scale, pin=0)
     if name == "inertia":

@@ -60,7 +60,7 @@ class Sweep:
     ``assemble(results)`` turns the merged {variable: array} into the dataset.
     ``warm_up()`` compiles what the threads share, once, before they start.
     ``bytes_per_point`` (result memory) and ``seconds_per_point`` (work on one core) are estimates
-    used to refuse what cannot fit and to announce long work.
+    used to refuse what cannot fit and to announce long work: every sweep gives both.
     """
 
     name: str  # progress-bar label, e.g. "outcome map"
@@ -74,6 +74,11 @@ class Sweep:
     unit: str = "run"
     bytes_per_point: float = 0.0
     seconds_per_point: float = 0.0
+
+    def __post_init__(self):
+        if not (self.bytes_per_point > 0 and self.seconds_per_point > 0):
+            raise ValueError(f"sweep {self.name!r}: give bytes_per_point and seconds_per_point (estimates that "
+                             "refuse a grid that cannot fit and announce long work)")
 
 
 class Grid:

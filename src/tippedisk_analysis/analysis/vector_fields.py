@@ -14,6 +14,8 @@ from dataclasses import dataclass
 import heyoka as hy
 import numpy as np
 
+from ..compilation import compiling
+
 
 @dataclass(frozen=True)
 class _Tensor:
@@ -54,7 +56,8 @@ class CompiledField:
     def _tensor(self, order: int, with_parameters: bool) -> _Tensor:
         key = (order, with_parameters)
         if key not in self._tensors:
-            self._tensors[key] = self._compile(order, with_parameters)
+            with compiling(f"the derivative tensors of order {order} ({self.n_out} outputs)"):
+                self._tensors[key] = self._compile(order, with_parameters)
         return self._tensors[key]
 
     def _compile(self, order: int, with_parameters: bool) -> _Tensor:

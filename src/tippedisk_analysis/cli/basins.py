@@ -10,13 +10,13 @@ Both are resumable (chunks in OUTPUT.chunks/) and run on threads or a dask clust
 from __future__ import annotations
 
 import re
-import sys
 
 from .. import defaults
 from ..errors import ParameterError
-from ..ranges import parse_range
 from ..files import show
-from .common import add_output, finite_float, output_path, positive_int, scheduler_type
+from ..ranges import parse_range
+from .common import add_disk, add_output, disk_from_args, finite_float, output_path, positive_int, scheduler_type, \
+    undecided_hint
 from .registry import command
 
 INITIAL_HELP = {"omega": "initial spin Omega [rad/s] (Table 3: 40)", "beta0": "initial beta [rad] (pi/2)",
@@ -27,7 +27,9 @@ INITIAL_HELP = {"omega": "initial spin Omega [rad/s] (Table 3: 40)", "beta0": "i
 def _common(p) -> None:
     p.add_argument("--eps", type=finite_float, help="smoothing of (2.29) [m/s] (0.1)")
     p.add_argument("--mu", type=finite_float, help="friction coefficient (0.3)")
-    p.add_argument("--e", type=finite_float, help="eccentricity [m] (2.5e-3)")
+    p.add_argument("--e", type=finite_float, help="eccentricity [m] (default: the disk's, Table 2: 2.5e-3). Held "
+                   "fixed: A, B, C about G (--disk table2 / given), or the hole geometry but its offset b "
+                   "(--disk geometry)")
     p.add_argument("--t-end", type=finite_float, default=60.0, help="maximum horizon of each run [s] (default 60)")
     p.add_argument("--dt", type=finite_float, help="sampling interval of the recurrence grid [s] (default 0.05)")
     p.add_argument("--tol", type=finite_float, default=defaults.MAP_TOL,
@@ -41,11 +43,19 @@ def _common(p) -> None:
     p.add_argument("--scheduler", type=scheduler_type,
                    help="dask.distributed scheduler address (tcp://host:8786), or local:N for N local processes")
     add_output(p, "netCDF file (chunks go to OUTPUT.chunks/; the same command resumes them)")
+    add_disk(p, e_option=False)
 
 
-def _options(args) -> dict:
+def _options(args, swept: str | None = None, first: float | None = None) -> dict:
+    """Library options of both commands; ``swept``: the parameter basin-fractions continues over (its first
+    value ``first`` completes a --disk given)."""
+    from ..parameters import Setup, to_dict
+
+    e_swept = swept == "e"
+    disk = disk_from_args(args, sweep_e=first if e_swept else None, e_swept=e_swept)
     opts = {"t_end": args.t_end, "tol": args.tol, "fall_angle": args.fall_angle, "batch_size": args.batch_size,
-            "parameters": {k: getattr(args, k) for k in ("eps", "mu", "e") if getattr(args, k) is not None}}
+            "parameters": {k: getattr(args, k) for k in ("eps", "mu", "e") if getattr(args, k) is not None},
+            "setup": to_dict(Setup(disk=disk))}
     if args.chunk_size is not None:
         opts["chunk_size"] = args.chunk_size
     if args.dt is not None:
@@ -65,14 +75,6 @@ def _basins_arguments(p) -> None:
     _common(p)
 
 
-def _estimate(n: int, progress: bool) -> None:
-    from ..analysis.basins import check_memory
-
-    need = check_memory(n)
-    if progress:
-        print(f"{n} runs, about {need / 2**20:.1f} MB in memory", file=sys.stderr)
-
-
 @command("basins", "basins of attraction over one or two initial values (recurrences) -> netCDF", _basins_arguments)
 def basins(args) -> int:
     from ..analysis import basins as bs
@@ -88,15 +90,9 @@ def basins(args) -> int:
         else:
             axes[name] = (start, stop, n)
     output = output_path(args)
-    cfg = bs.BasinConfig(axes=axes, initial=fixed, **_options(args))
-    _estimate(cfg.n_points, True)
-    if args.overwrite:
-        from ..analysis.sweeps import discard_other_configuration
-
-        discard_other_configuration(bs.basin_sweep(cfg), output)
-    ds = bs.basins(axes, initial=fixed, output=output, scheduler=args.scheduler, threads=args.threads,
-                   **_options(args))
-    print(f"{show(output)}: {ds.attrs['message']}")
+    ds = bs.basins(axes, initial=fixed, output=output, overwrite=args.overwrite, scheduler=args.scheduler,
+                   threads=args.threads, **_options(args))
+    print(f"{show(output)}: {ds.attrs['message']}{undecided_hint(ds, args.t_end)}")
     return 1 if ds.attrs["status"] != "completed" else 0
 
 
@@ -141,16 +137,9 @@ def basin_fractions(args) -> int:
         (ranges if isinstance(v, tuple) else fixed)[n] = v
     if not ranges:
         raise ParameterError("give at least one sampled range LOW:HIGH, e.g. --dgamma0 -3.1:3.1 --beta0 1.2:1.9")
-    opts = _options(args)
+    opts = _options(args, swept=name, first=values[0])
     output = output_path(args)
-    cfg = bs.FractionsConfig(parameter=name, values=list(values), ranges=ranges, samples=args.samples, seed=args.seed,
-                             initial=fixed, **opts)
-    _estimate(cfg.n_points, True)
-    if args.overwrite:
-        from ..analysis.sweeps import discard_other_configuration
-
-        discard_other_configuration(bs.fractions_sweep(cfg), output)
     ds = bs.basin_fractions(name, values, ranges, samples=args.samples, seed=args.seed, initial=fixed, output=output,
-                            scheduler=args.scheduler, threads=args.threads, **opts)
-    print(f"{show(output)}: {ds.attrs['message']}")
+                            overwrite=args.overwrite, scheduler=args.scheduler, threads=args.threads, **opts)
+    print(f"{show(output)}: {ds.attrs['message']}{undecided_hint(ds, args.t_end)}")
     return 1 if ds.attrs["status"] != "completed" else 0

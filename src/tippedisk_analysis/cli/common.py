@@ -70,14 +70,6 @@ def output_path(args, path: str | None = None, netcdf: bool = True) -> Path:
     return files.check_output(path if path is not None else args.output, overwrite=args.overwrite, netcdf=netcdf)
 
 
-def writable(path: str) -> Path:
-    """The output path checked before any work starts, replacing an existing file (older commands).
-
-    Prefer :func:`output_path` with :func:`add_output`, which refuses an existing output without
-    ``--overwrite`` like every other command."""
-    return files.check_output(path, overwrite=True)
-
-
 def add_initial_and_friction(p: argparse.ArgumentParser, omega: bool = True) -> None:
     """Options of one trajectory of ODE Model 1 from the Table 3 start (Poincaré sections, bifurcation diagrams)."""
     if omega:
@@ -110,6 +102,21 @@ def add_disk(p: argparse.ArgumentParser, e_option: bool = True) -> None:
     g.add_argument("--thickness", type=finite_float, help="thickness h [m] (--disk geometry; 0.01)")
 
 
+DISK_OPTIONS = {"m": "--mass", "e": "--e", "r": "--radius", "A": "--A", "B": "--B", "C": "--C", "rho": "--rho",
+                "a": "--hole-radius", "b": "--hole-offset", "h": "--thickness"}
+"""Disk field -> option of :func:`add_disk` (``--e`` is a command's own option where it is swept or fixed)."""
+_DISK_ATTRS = {"m": "mass", "e": "e", "r": "radius", "A": "A", "B": "B", "C": "C", "rho": "rho", "a": "hole_radius",
+               "b": "hole_offset", "h": "thickness"}
+
+
+def disk_options_given(args, include_e: bool = True) -> list[str]:
+    """The disk options given on the command line (``--disk`` other than table2 included), for commands that
+    refuse them where a dataset already fixes the disk."""
+    given = [DISK_OPTIONS[k] for k, attr in _DISK_ATTRS.items() if getattr(args, attr, None) is not None
+             and (include_e or k != "e")]
+    return (["--disk"] if getattr(args, "disk", "table2") != "table2" else []) + given
+
+
 def disk_from_args(args, *, sweep_e: float | None = None, e_swept: bool = False):
     """The Disk the options describe; ParameterError (one line) for options that do not belong to --disk.
 
@@ -119,13 +126,10 @@ def disk_from_args(args, *, sweep_e: float | None = None, e_swept: bool = False)
     """
     from ..parameters import Disk
 
-    given = {name: getattr(args, attr, None) for name, attr in
-             (("m", "mass"), ("e", "e"), ("r", "radius"), ("A", "A"), ("B", "B"), ("C", "C"), ("rho", "rho"),
-              ("a", "hole_radius"), ("b", "hole_offset"), ("h", "thickness"))}
+    given = {name: getattr(args, attr, None) for name, attr in _DISK_ATTRS.items()}
     if e_swept:
         given["e"] = sweep_e if getattr(args, "disk", "table2") == "given" else None
-    option = {"m": "--mass", "e": "--e", "r": "--radius", "A": "--A", "B": "--B", "C": "--C", "rho": "--rho",
-              "a": "--hole-radius", "b": "--hole-offset", "h": "--thickness"}
+    option = DISK_OPTIONS
     present = {k for k, v in given.items() if v is not None}
     source = getattr(args, "disk", "table2")
 
@@ -169,3 +173,19 @@ def setup_and_initial(args, omega: bool = True):
     if args.dgamma0 is not None:
         init["gamma"] = -0.5 * math.pi + args.dgamma0
     return Setup(disk=disk_from_args(args), friction=dataclasses.replace(Friction(), **fric)), InitialState(**init)
+
+
+def undecided_hint(ds, t_end: float) -> str:
+    """What to do about runs classified ``undecided`` by attractors (appended to the command's one line):
+    they had not reached an attractor when the horizon ended."""
+    outcome = ds.get("outcome")
+    by_attractors = ds.attrs.get("kind") in ("basins", "basin_fractions") or ds.attrs.get("classify") == "attractors"
+    if not by_attractors or outcome is None or "undecided" not in str(outcome.attrs.get("flag_meanings", "")).split():
+        return ""
+    flags = dict(zip(str(outcome.attrs["flag_meanings"]).split(), list(outcome.attrs["flag_values"])))
+    n = int((outcome.values == flags["undecided"]).sum())
+    if not n:
+        return ""
+    return (f"; {n} of {outcome.size} runs undecided: the horizon --t-end {t_end:g} s ended before they reached an "
+            "attractor (the tippedisk's transients last tens of seconds); give a longer --t-end, e.g. 60"
+            + (", or --classify rules" if ds.attrs.get("kind") == "outcome_map" else ""))

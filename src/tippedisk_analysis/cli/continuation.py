@@ -4,7 +4,8 @@ zero-eigenvalue points in two parameters."""
 from __future__ import annotations
 
 from ..errors import ParameterError
-from .common import add_output, finite_float, output_path, positive_int
+from ..files import show
+from .common import add_disk, add_output, disk_from_args, disk_options_given, finite_float, output_path, positive_int
 from .registry import command
 
 PARAMETER_HELP = "omega (spin rate), eps, mu, e (A, B, C about G fixed), inertia (scale of A, B, C)"
@@ -30,11 +31,13 @@ def _arguments(p) -> None:
                                                           "(not with --from-point: the point fixes it)")
     fixed.add_argument("--eps", type=finite_float, help="smoothing of (2.29) [m/s] (0.1)")
     fixed.add_argument("--mu", type=finite_float, help="friction coefficient (0.3)")
-    fixed.add_argument("--e", type=finite_float, help="eccentricity [m] (2.5e-3)")
+    fixed.add_argument("--e", type=finite_float, help="eccentricity [m] (default: the disk's, Table 2: 2.5e-3; A, B, "
+                                                      "C about G held fixed)")
     step = p.add_argument_group("step control (scaled arclength)")
     step.add_argument("--ds-max", type=finite_float, help="largest step (default 0.2 in omega, else 0.05)")
     step.add_argument("--max-points", type=positive_int, default=500, help="points per direction (default 500)")
     add_output(p)
+    add_disk(p, e_option=False)
 
 
 def _bounds(items: list[str]) -> dict:
@@ -57,12 +60,10 @@ def continue_(args) -> int:
 
     from .. import results
     from ..analysis import continuation, spin_continuation
-    from ..parameters import Disk, Friction, Setup
+    from ..parameters import Friction, Setup
 
     output = output_path(args)
     friction = {k: v for k, v in (("eps", args.eps), ("mu", args.mu)) if v is not None}
-    setup = Setup(disk=dataclasses.replace(Disk(), **({"e": args.e} if args.e is not None else {})),
-                  friction=dataclasses.replace(Friction(), **friction))
     options = {"max_points": args.max_points}
     if args.ds_max is not None and not args.ds_max > 0:
         raise ParameterError(f"--ds-max {args.ds_max:g}: give a positive step, e.g. --ds-max 0.05")
@@ -70,8 +71,9 @@ def continue_(args) -> int:
         path, _, label = args.from_point.rpartition(":")
         if not path or not label:
             raise ParameterError(f"--from-point {args.from_point!r} is not FILE:LABEL; give e.g. c.nc:HOPF1")
-        given = [f"--{name.replace('_', '-')}" for name in ("eps", "mu", "e", "omega", "start")
-                 if getattr(args, name) is not None] + (["--branch"] if args.branch != "inverted" else [])
+        given = [f"--{name.replace('_', '-')}" for name in ("eps", "mu", "omega", "start")
+                 if getattr(args, name) is not None] + (["--branch"] if args.branch != "inverted" else []) + \
+            disk_options_given(args)
         if given:
             raise ParameterError(f"{', '.join(given).replace('--start', '--from')} with --from-point: the point's "
                                  "dataset fixes the branch and the parameters; drop them")
@@ -96,11 +98,12 @@ def continue_(args) -> int:
                                  "--parameter, --from and --to")
         if args.stop is None:
             raise ParameterError("give --to (the end value of the continuation parameter)")
+        setup = Setup(disk=disk_from_args(args), friction=dataclasses.replace(Friction(), **friction))
         options["ds_max"] = args.ds_max or (0.2 if args.parameter == "omega" else 0.05)
         ds = spin_continuation.continue_branch(args.branch, args.parameter, args.start, args.stop, setup=setup,
                                                omega=args.omega,
                                                options=continuation.Options(ds=min(0.02, options["ds_max"]),
                                                                             **options))
     results.save(ds, output)
-    print(f"{output}: {ds.attrs['message']}")
+    print(f"{show(output)}: {ds.attrs['message']}")
     return 0 if ds.attrs["status"] == "completed" else 1

@@ -6,7 +6,9 @@ from __future__ import annotations
 
 from .. import defaults
 from ..errors import ParameterError
-from .common import finite_float, positive_int, range_type, writable
+from ..files import show
+from .common import add_disk, add_output, disk_from_args, disk_options_given, finite_float, output_path, \
+    positive_int, range_type, scheduler_type
 from .registry import command
 
 
@@ -26,8 +28,10 @@ def _arguments(p) -> None:
     p.add_argument("--chunk-size", type=positive_int, default=128, help="map points per stored chunk (default 128)")
     p.add_argument("--batch-size", type=positive_int, default=defaults.BATCH_SIZE, help="SIMD lanes (default 4)")
     p.add_argument("--threads", type=positive_int, help="threads without --scheduler (default: cores)")
-    p.add_argument("--scheduler", help="dask.distributed scheduler address, or local:N")
-    p.add_argument("--output", "-o", required=True, help="netCDF file (a map's chunks go to OUTPUT.chunks/)")
+    p.add_argument("--scheduler", type=scheduler_type,
+                   help="dask.distributed scheduler address (tcp://host:8786), or local:N for N local processes")
+    add_output(p, "netCDF file (a map's finished chunks go to OUTPUT.chunks/; the same command resumes them)")
+    add_disk(p)
 
 
 @command("lyapunov", "Lyapunov exponents: a run's spectrum, or a map of the largest over (Omega, eps)", _arguments)
@@ -38,32 +42,38 @@ def lyapunov(args) -> int:
     from ..analysis import lyapunov as ly
     from ..parameters import Friction, InitialState, Setup, to_dict
 
-    output = writable(args.output)
+    output = output_path(args)
     if args.system:
         if args.system != "lorenz":
             raise ParameterError(f"--system {args.system!r}: the Lyapunov command knows lorenz")
-        if args.omega or args.eps:
-            raise ParameterError("--omega and --eps belong to the tippedisk, not to --system")
+        tippedisk_only = (["--omega"] if args.omega else []) + (["--eps"] if args.eps else []) + \
+            (["--mu"] if args.mu is not None else []) + disk_options_given(args)
+        if tippedisk_only:
+            raise ParameterError(f"{', '.join(tippedisk_only)} belong(s) to the tippedisk, not to --system; drop them")
         ds = ly.textbook_spectrum("lorenz", [1.0, 1.0, 1.0], t_end=args.t_end or 1000.0, dt=args.dt or 1.0,
                                   transient=args.transient or 10.0, tol=args.tol or ly.TOL)
-    else:
-        omega = args.omega or (40.0, 40.0, 1)
-        eps = args.eps or (Friction().eps, Friction().eps, 1)
-        friction = {"mu": args.mu} if args.mu is not None else {}
-        if omega[2] > 1 or eps[2] > 1:
-            if args.n_exponents not in (None, 1) or args.transient:
-                raise ParameterError("maps compute the largest exponent from t = 0: drop --n-exponents / --transient")
-            setup = Setup(friction=dataclasses.replace(Friction(), **friction))
-            ds = ly.lyapunov_map(omega, eps, output=output, scheduler=args.scheduler, threads=args.threads,
-                                 t_end=args.t_end or 20.0, dt=args.dt or 0.5, dgamma0=args.dgamma0,
-                                 tol=args.tol or defaults.MAP_TOL, chunk_size=args.chunk_size,
-                                 batch_size=args.batch_size, setup=to_dict(setup))
-            print(f"{output}: {ds.attrs['message']}")
-            return 0 if ds.attrs["status"] == "completed" else 1
-        setup = Setup(friction=dataclasses.replace(Friction(), eps=eps[0], **friction))
-        initial = InitialState(alpha_dot=omega[0], gamma=-1.5707963267948966 + args.dgamma0)
-        ds = ly.tippedisk_spectrum(setup, initial, t_end=args.t_end or 20.0, dt=args.dt or ly.DT,
-                                   transient=args.transient, n_exponents=args.n_exponents, tol=args.tol or ly.TOL)
+        results.save(ds, output)
+        print(f"{show(output)}: {ds.attrs['message']}")
+        return 0 if ds.attrs["status"] == "completed" else 1
+    omega = args.omega or (40.0, 40.0, 1)
+    eps = args.eps or (Friction().eps, Friction().eps, 1)
+    friction = dataclasses.replace(Friction(), **({"mu": args.mu} if args.mu is not None else {}))
+    disk = disk_from_args(args)
+    if omega[2] > 1 or eps[2] > 1:
+        if args.n_exponents not in (None, 1) or args.transient:
+            raise ParameterError("maps compute the largest exponent from t = 0: drop --n-exponents / --transient")
+        ds = ly.lyapunov_map(omega, eps, output=output, overwrite=args.overwrite, scheduler=args.scheduler,
+                             threads=args.threads, t_end=args.t_end or 20.0, dt=args.dt or 0.5, dgamma0=args.dgamma0,
+                             tol=args.tol or defaults.MAP_TOL, chunk_size=args.chunk_size, batch_size=args.batch_size,
+                             setup=to_dict(Setup(disk=disk, friction=friction)))
+        print(f"{show(output)}: {ds.attrs['message']}")
+        return 0 if ds.attrs["status"] == "completed" else 1
+    if args.scheduler or args.threads:
+        raise ParameterError("--scheduler and --threads belong to maps (ranges START:STOP:N of --omega or --eps)")
+    setup = Setup(disk=disk, friction=dataclasses.replace(friction, eps=eps[0]))
+    initial = InitialState(alpha_dot=omega[0], gamma=-1.5707963267948966 + args.dgamma0)
+    ds = ly.tippedisk_spectrum(setup, initial, t_end=args.t_end or 20.0, dt=args.dt or ly.DT,
+                               transient=args.transient, n_exponents=args.n_exponents, tol=args.tol or ly.TOL)
     results.save(ds, output)
-    print(f"{output}: {ds.attrs['message']}")
+    print(f"{show(output)}: {ds.attrs['message']}")
     return 0 if ds.attrs["status"] == "completed" else 1

@@ -8,7 +8,7 @@ from __future__ import annotations
 from .. import defaults
 from ..files import show
 from .common import add_disk, add_output, disk_from_args, finite_float, output_path, positive_int, range_type, \
-    scheduler_type
+    scheduler_type, undecided_hint
 from .registry import command
 
 
@@ -60,5 +60,5 @@ def outcome_map(args) -> int:
     ds = run_map(ranges, output=output, scheduler=args.scheduler, threads=args.threads, t_end=t_end,
                  window=args.window, tol=args.tol, fall_angle=args.fall_angle, chunk_size=args.chunk_size,
                  batch_size=args.batch_size, setup=setup, overwrite=args.overwrite, **attractors)
-    print(f"{show(output)}: {ds.attrs['message']}")
+    print(f"{show(output)}: {ds.attrs['message']}{undecided_hint(ds, t_end)}")
     return 0

@@ -11,7 +11,8 @@ the trial period); 1 a numerical failure (non-finite flow, a branch ended by the
 from __future__ import annotations
 
 from ..errors import ParameterError
-from .common import add_output, finite_float, positive_int, writable
+from ..files import show
+from .common import add_disk, add_output, disk_from_args, disk_options_given, finite_float, output_path, positive_int
 from .registry import command
 
 EXIT_NO_ORBIT = 3
@@ -39,12 +40,14 @@ def _arguments(p) -> None:
     book = p.add_argument_group("--system / --from-orbit options")
     book.add_argument("--to", type=finite_float, help="continue the branch in the system's parameter to this value")
     book.add_argument("--parameter", help="--from-orbit: the continuation parameter (default the dataset's)")
-    book.add_argument("--radius", type=finite_float, default=0.05, help="orbit radius of a Hopf start (default 0.05)")
+    book.add_argument("--hopf-radius", type=finite_float, help="orbit radius of a Hopf start (default 0.05; "
+                                                                "--frictionless: 1e-3); --radius is the disk's rim")
     book.add_argument("--period-max", type=finite_float, help="stop the branch at this period (homoclinic approach)")
     book.add_argument("--segments", type=positive_int, help="shooting segments (default 1, or the dataset's)")
     book.add_argument("--phase", default="poincare", choices=("poincare", "integral"), help="phase condition")
     book.add_argument("--max-points", type=positive_int, default=200, help="branch points per direction (200)")
     add_output(p)
+    add_disk(p)
 
 
 @command("periodic-orbits", "periodic orbits by shooting: Floquet multipliers, branches (no orbit on the "
@@ -57,7 +60,12 @@ def periodic_orbits(args) -> int:
     if len(starts) != 1:
         raise ParameterError("give exactly one of --from-hopf FILE:LABEL, --from-run FILE, --system NAME, "
                              "--from-orbit FILE:POINT, --frictionless BRANCH:OMEGA")
-    output = writable(args.output)
+    output = output_path(args)
+    disk_given = disk_options_given(args)
+    if disk_given and not args.frictionless:
+        source = "--system (a textbook system has no disk)" if args.system else "the start dataset (it fixes the disk)"
+        raise ParameterError(f"{', '.join(disk_given)} with {source}: the disk options belong to --frictionless; drop "
+                             "them (the orbit radius of a Hopf start is --hopf-radius; --radius is the disk's rim)")
     if args.from_hopf:
         path, _, label = args.from_hopf.rpartition(":")
         if not path or not label:
@@ -87,7 +95,7 @@ def periodic_orbits(args) -> int:
     else:
         ds = _textbook(args, po)
     results.save(ds, output)
-    print(f"{output}: {ds.attrs['message']}")
+    print(f"{show(output)}: {ds.attrs['message']}")
     if ds.attrs["status"] == "no_orbit":
         return EXIT_NO_ORBIT
     return 0 if ds.attrs["status"] == "completed" else 1
@@ -102,10 +110,13 @@ def _frictionless(args, po):
         omega = float(omega)
     except ValueError:
         raise ParameterError(f"--frictionless {args.frictionless!r} is not BRANCH:OMEGA; give e.g. inverted:40") from None
-    setup = Setup(friction=Friction(mu=0.0))
-    br, prob = po.tippedisk_lyapunov_family(setup, branch, omega, args.to, radius=args.radius if args.radius != 0.05
-                                            else 1e-3, options=continuation.Options(ds=0.02, ds_max=0.1,
-                                                                                    max_points=args.max_points))
+    setup = Setup(disk=disk_from_args(args), friction=Friction(mu=0.0))
+    radius = 1e-3 if args.hopf_radius is None else args.hopf_radius
+    if not radius > 0:
+        raise ParameterError(f"--hopf-radius {radius:g} must be positive")
+    br, prob = po.tippedisk_lyapunov_family(setup, branch, omega, args.to, radius=radius,
+                                            options=continuation.Options(ds=0.02, ds_max=0.1,
+                                                                         max_points=args.max_points))
     return po.tippedisk_branch_dataset(prob, br, {"source": "frictionless", "branch": branch, "omega": omega,
                                                   "setup": po._to_dict(setup)})
 
@@ -116,11 +127,12 @@ def _textbook(args, po):
         names = ", ".join(k for k, v in po.TEXTBOOK.items() if v.start)
         raise ParameterError(f"unknown system {args.system!r} for periodic orbits; choose one of {names}")
     system = po.textbook_system(args.system)
-    if not args.radius > 0:
-        raise ParameterError(f"--radius {args.radius} must be positive")
+    radius = 0.05 if args.hopf_radius is None else args.hopf_radius
+    if not radius > 0:
+        raise ParameterError(f"--hopf-radius {radius:g} must be positive")
     if "hopf" in tb.start:
         value, state = tb.start["hopf"]
-        orbit, _g = po.orbit_from_hopf(system, tb.parameter, value, state, radius=args.radius,
+        orbit, _g = po.orbit_from_hopf(system, tb.parameter, value, state, radius=radius,
                                        segments=args.segments or 1, phase=args.phase)
     else:
         value, state, period = tb.start["orbit"]

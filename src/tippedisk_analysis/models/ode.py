@@ -44,7 +44,7 @@ import numpy as np
 from .. import kinematics as kin
 from ..defaults import FALL_ANGLE, SLIP_SMOOTHING
 from ..parameters import InitialState, Setup
-from .variables import ORIENTATIONS, OUTPUT_NAMES, PARAMETER_NAMES, state_names
+from .variables import ORIENTATIONS, OUTPUT_NAMES, PARAMETER_NAMES, state_names  # noqa: F401 (ode.OUTPUT_NAMES)
 
 P = {name: hy.par[i] for i, name in enumerate(PARAMETER_NAMES)}
 

@@ -16,14 +16,13 @@ import heyoka as hy
 import numpy as np
 import xarray as xr
 
+from ..compilation import compiling
 from ..defaults import FALL_ANGLE, SLIP_SMOOTHING, TAYLOR_TOL
 from ..errors import IntegrationError, ParameterError
 from ..models import ode
 from ..parameters import InitialState, Setup, to_dict
 from ..results import describe, flat_parameters, make_attrs
 
-if hasattr(hy.llvm_state, "set_diskcache_enabled"):  # heyoka >= 7.10: compiled code persists across processes
-    hy.llvm_state.set_diskcache_enabled(True)
 
 
 @dataclass(frozen=True)
@@ -39,14 +38,15 @@ def compiled(model_name: str, tol: float) -> CompiledModel:
     model = ode.MODELS[model_name]
     variables, sys, fall, outputs = ode.system(model)
     setup, initial = Setup(), InitialState()  # placeholders; every run sets its own
-    integrator = hy.taylor_adaptive(
-        sys,
-        ode.initial_state_vector(model, setup, initial),
-        pars=ode.parameter_vector(setup),
-        tol=tol,
-        t_events=[hy.t_event(fall, direction=hy.event_direction.negative)],
-    )
-    return CompiledModel(model, integrator, hy.cfunc(outputs, variables))
+    with compiling(f"the {model.paper_name} integrator ({model_name}, tol {tol:g})"):
+        integrator = hy.taylor_adaptive(
+            sys,
+            ode.initial_state_vector(model, setup, initial),
+            pars=ode.parameter_vector(setup),
+            tol=tol,
+            t_events=[hy.t_event(fall, direction=hy.event_direction.negative)],
+        )
+        return CompiledModel(model, integrator, hy.cfunc(outputs, variables))
 
 
 @dataclass
