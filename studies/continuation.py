@@ -69,7 +69,7 @@ def _simulation_checks(ds, setup, quick: bool) -> None:
     nf = normal_forms.line_hopf(f.tensor(x, pars, 1)[:7, :7], f.tensor(x, pars, 2)[:7, :7, :7], phi0,
                                 lambda w: (G @ w) * np.linalg.norm(Gamma @ w))
     z0 = 0.01
-    tr = taylor.integrate("ode-euler", setup, reduced.full_from_reduced(x + 2 * (z0 * nf["q"]).real, setup.disk.r),
+    tr = taylor.integrate("ode-euler", setup, reduced.full_from_reduced(x + 2 * (z0 * nf["q"]).real),
                           2.0 if quick else 8.0, 1e-3, 1e-14, 0.1, 1e-12)
     alpha_dot = tr.outputs[ode.OUTPUT_NAMES.index("alpha_dot")]
     period = 2 * np.pi / nf["frequency"]

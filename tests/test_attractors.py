@@ -189,7 +189,6 @@ def test_labels_left_grid_terminal_and_undecided():
 def _near_spin(omega, eps, kick=0.02, n=4):
     """Model states near the inverted spin at omega (perturbed beta, gamma rates), parameters at eps."""
     setup = Setup(friction=Friction(eps=eps))
-    r = setup.disk.r
     x = st.stationary_state("inverted", [omega])[:, 0]
     states = []
     for k in range(n):
@@ -197,7 +196,7 @@ def _near_spin(omega, eps, kick=0.02, n=4):
         y[0] += kick * math.cos(k)
         y[1] += kick * math.sin(k)
         y[5] += 10 * kick * math.sin(2 * k)
-        states.append(full_from_reduced(y, r))
+        states.append(full_from_reduced(y))
     return np.array(states).T, ode.parameter_vector(setup)
 
 
@@ -222,7 +221,9 @@ def test_runs_near_a_stable_spin_end_in_the_stationary_solution():
     red = bs.reduced_of(np.array(ta.state))
     spin = bs.evaluate_observables(np.array(ta.state), pars)["alpha_dot"]
     red[1] = (red[1] + math.pi) % (2 * math.pi) - math.pi
-    np.testing.assert_allclose(red, st.stationary_state("inverted", spin), atol=1e-6)
+    # to the batch runs' accuracy: tol 1e-10 relative to |alpha| ~ 6000 rad after 200 s leaves ~1e-6 (the
+    # distance stays there from 200 to 300 s, and moves with the start's alpha: the integration's floor)
+    np.testing.assert_allclose(red, st.stationary_state("inverted", spin), atol=5e-6)
     assert np.all((spin > d.extra["segment_min"]) & (spin < d.extra["segment_max"]))
 
 

@@ -258,7 +258,7 @@ def _point_state(ds, label):
 
 
 def _reduced_run(x0, t_end, dt):
-    tr = taylor.integrate("ode-euler", SETUP, reduced.full_from_reduced(x0, SETUP.disk.r), t_end, dt, 1e-14, 0.1, 1e-12)
+    tr = taylor.integrate("ode-euler", SETUP, reduced.full_from_reduced(x0), t_end, dt, 1e-14, 0.1, 1e-12)
     S = tr.states
     names = ode.EULER.state_names
     idx = [names.index(n) for n in ("alpha", "beta", "gamma", "x_dot", "y_dot", "omega_x", "omega_y", "omega_z")]
@@ -315,7 +315,7 @@ def test_zero_eigenvalue_point_is_a_repelling_node_and_orbits_leave_it(branch):
                                          np.eye(7)[reduced.OMEGA_X_INDEX])
     delta = 0.004
     x0 = st.stationary_state("inverted", [omega + delta])[:, 0] + 1e-4 * nf["q"]
-    tr = taylor.integrate("ode-euler", SETUP, reduced.full_from_reduced(x0, SETUP.disk.r), 8000.0, 1.0, 1e-12, 0.1,
+    tr = taylor.integrate("ode-euler", SETUP, reduced.full_from_reduced(x0), 8000.0, 1.0, 1e-12, 0.1,
                           1e-12)
     alpha_dot = tr.outputs[ode.OUTPUT_NAMES.index("alpha_dot")]
     elliptic_landing = omega - delta  # where an elliptic point would return the orbit

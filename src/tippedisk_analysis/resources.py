@@ -8,6 +8,7 @@ are deliberately rough (a factor of two either way) and err on the large side.
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 from pathlib import Path
@@ -20,8 +21,9 @@ WORKER_BYTES = 0.4e9
 """Memory of one dask worker process with a compiled heyoka integrator (measured ~0.3 GB)."""
 
 
+@functools.lru_cache(maxsize=1)
 def machine_memory() -> float:
-    """Bytes of physical memory (or the cgroup limit, if lower)."""
+    """Bytes of physical memory (or the cgroup limit, if lower); read once per process."""
     try:
         total = float(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
     except (ValueError, OSError, AttributeError):  # pragma: no cover - not POSIX

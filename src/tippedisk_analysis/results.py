@@ -81,12 +81,12 @@ VARIABLES: dict[str, tuple[str, str]] = {
 }
 
 def describe(ds: xr.Dataset) -> xr.Dataset:
-    """Attach units and long_name to every known variable and coordinate."""
-    for name in list(ds.variables):
+    """Attach units and long_name to every known variable and coordinate (in place; returns ``ds``)."""
+    for name, var in ds.variables.items():
         if name in VARIABLES:
             units, long_name = VARIABLES[name]
-            ds[name].attrs.setdefault("units", units)
-            ds[name].attrs.setdefault("long_name", long_name)
+            var.attrs.setdefault("units", units)
+            var.attrs.setdefault("long_name", long_name)
     return ds
 
 

@@ -173,7 +173,7 @@ def reduced_from_full(alpha, beta, gamma, x_dot, y_dot, omega_x, omega_y, omega_
         len(STATE_NAMES), -1)
 
 
-def full_from_reduced(state, alpha: float = 0.0) -> np.ndarray:
+def full_from_reduced(state, *, alpha: float = 0.0) -> np.ndarray:
     """ODE Model 1 state (ode.EULER.state_names) from a reduced state (7,): x = y = 0, the given alpha,
     horizontal v_G from u turned by alpha (3.1), W_friction = 0. The inverse of :func:`reduced_from_full`."""
     beta, gamma, u_x, u_y, w_x, w_y, w_z = np.asarray(state, dtype=float)

@@ -98,7 +98,7 @@ def simulate(model: str = "ode-euler", t_end: float = 5.0, *, setup: Setup | Non
                              f"it takes {sorted(info.options)}")
     _check_positive(options, ("dt_output", "tol", "slip_smoothing", "dt"))
     if "tol" in options and not options["tol"] < 1:
-        raise ParameterError(f"tol = {options['tol']!r} must lie in (0, 1); give e.g. 1e-14 (ODE) or 1e-8 (Moreau)")
+        raise ParameterError(f"tol = {options['tol']!r} must lie in (0, 1); give e.g. 1e-13 (ODE) or 1e-8 (Moreau)")
     _check_memory(info, float(t_end), options)
     return info.run(setup, initial, float(t_end), **options)
 
