@@ -43,7 +43,10 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--skip-dask", action="store_true")
     ap.add_argument("--skip-basin", action="store_true")
+    ap.add_argument("--quick", action="store_true", help="4 x 4 map and basins, no dask (the smoke run)")
     args = ap.parse_args()
+    if args.quick:
+        args.n_map, args.n_basin, args.skip_dask = 4, 4, True
 
     from tippedisk_analysis.analysis import basins as bs
     from tippedisk_analysis.analysis import outcome_map as om

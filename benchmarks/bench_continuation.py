@@ -17,7 +17,10 @@ import time
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--quick", action="store_true", help="one repetition (the test suite's smoke run)")
     args = ap.parse_args()
+    if args.quick:
+        args.repeat = 1
 
     t0 = time.perf_counter()
     import numpy as np

@@ -1,6 +1,6 @@
 """Moreau time stepping: steps per second of Models 1-10 (numba, warm) vs a plain numpy step.
 
-Run: ``.venv/bin/python benchmarks/bench_moreau.py [--steps 200000] [--numpy-steps 2000]``.
+Run: ``.venv/bin/python benchmarks/bench_moreau.py [--steps 200000] [--numpy-steps 2000] [--quick]``.
 Not part of the test suite. The numpy baseline below implements the same step (same
 velocity space, same force laws and prox operators, Jacobi sweep) with numpy arrays and
 :mod:`tippedisk_analysis.kinematics`; its first steps are checked against the numba loop.
@@ -152,7 +152,10 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=200_000)
     parser.add_argument("--numpy-steps", type=int, default=1000)
+    parser.add_argument("--quick", action="store_true", help="20,000 steps, 20 numpy steps (the smoke run)")
     args = parser.parse_args()
+    if args.quick:
+        args.steps, args.numpy_steps = 20_000, 20
     setup = Setup()
     poly = prox.contensou_polygon()
     print(f"{'model':<48}{'numba steps/s':>15}{'numpy steps/s':>15}{'speed-up':>10}{'check':>10}")

@@ -26,7 +26,10 @@ def main() -> None:
     ap.add_argument("--t-end", type=float, default=5.0)
     ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--skip-scalar", action="store_true")
+    ap.add_argument("--quick", action="store_true", help="a 4 x 4 map of 1-s runs, no scalar loop (the smoke run)")
     args = ap.parse_args()
+    if args.quick:
+        args.n, args.t_end, args.skip_scalar = 4, 1.0, True
 
     import heyoka as hy
 

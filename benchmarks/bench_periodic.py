@@ -23,7 +23,10 @@ def main() -> None:
     ap.add_argument("--n", type=int, default=64)
     ap.add_argument("--threads", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--quick", action="store_true", help="a 4 x 4 map, one repetition (the smoke run)")
     args = ap.parse_args()
+    if args.quick:
+        args.n, args.repeat = 4, 1
     from tippedisk_analysis.analysis import continuation as co
     from tippedisk_analysis.analysis import lyapunov as ly
     from tippedisk_analysis.analysis import periodic as po

@@ -1,6 +1,6 @@
 """Benchmark: eigenvalue stability of 100,000 (Omega, eps) points per branch (target <= 10 s on 2 cores).
 
-Run: PYTHONPATH=src python benchmarks/bench_stability.py [n_omega n_eps]
+Run: .venv/bin/python benchmarks/bench_stability.py [--n-omega 400 --n-eps 250] [--quick]
 Measures (1) the batched compiled Jacobian + eigenvalues alone and (2) the full
 :func:`stability_map` (with the stationary residuals and the brentq refinement of Omega_c).
 Compilation (or the heyoka on-disk cache lookup) is timed separately.
@@ -8,19 +8,26 @@ Compilation (or the heyoka on-disk cache lookup) is timed separately.
 
 from __future__ import annotations
 
+import argparse
 import os
-import sys
 import time
 
 import numpy as np
 
 
-def main(n_omega: int = 400, n_eps: int = 250) -> None:
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--n-omega", type=int, default=400)
+    ap.add_argument("--n-eps", type=int, default=250)
+    ap.add_argument("--quick", action="store_true", help="a 40 x 25 grid (the test suite's smoke run)")
+    args = ap.parse_args()
+    n_omega, n_eps = (40, 25) if args.quick else (args.n_omega, args.n_eps)
     t0 = time.perf_counter()
-    from tippedisk_analysis.analysis import maps, stability, stationary
+    from tippedisk_analysis.analysis import maps, reduced, stability, stationary
+    from tippedisk_analysis.models import ode
 
-    stability._jacobian_cfunc()
-    stationary._rhs_cfunc()
+    reduced._jacobian_cfunc()
+    reduced._rhs_cfunc()
     t_compile = time.perf_counter() - t0
     omega = np.linspace(0.0, 200.0, n_omega)
     eps = np.linspace(0.01, 1.0, n_eps)
@@ -28,8 +35,8 @@ def main(n_omega: int = 400, n_eps: int = 250) -> None:
     print(f"points per branch: {n:,} ({n_omega} Omega x {n_eps} eps); cores: {os.cpu_count()} (shared machine)")
     print(f"compile / cache load: {t_compile:.2f} s")
 
-    pars = np.repeat(stationary.parameter_vector()[:, None], n, axis=1)
-    pars[8] = np.tile(eps, n_omega)
+    pars = np.repeat(ode.parameter_vector()[:, None], n, axis=1)
+    pars[ode.PARAMETER_NAMES.index("eps")] = np.tile(eps, n_omega)
     om = np.repeat(omega, n_eps)
     for branch in maps.BRANCH_NAMES:
         t = time.perf_counter()
@@ -42,11 +49,11 @@ def main(n_omega: int = 400, n_eps: int = 250) -> None:
         print(f"{branch:12s} Jacobian {t_j:.2f} s, + eigenvalues/classification {t_all:.2f} s")
 
     t = time.perf_counter()
-    ds = maps.stability_map(omega, eps)
+    ds = maps.stability_map(omega, eps, progress=False)
     t_map = time.perf_counter() - t
     print(f"stability_map, both branches incl. {int(ds['n_critical'].sum())} critical speeds: {t_map:.2f} s "
           f"({t_map / 2:.2f} s per branch)")
 
 
 if __name__ == "__main__":
-    main(*(int(a) for a in sys.argv[1:3]))
+    main()

@@ -281,8 +281,8 @@ class EquilibriumProblem(continuation.Problem):
     def describe(self, kind: str, u: np.ndarray) -> dict:
         x, pars = u[: self.n], self.runtime(u)
         n = self.n
-        J = self.field.tensor(x, pars, 1)[:n, :n]
-        B = self.field.tensor(x, pars, 2)[:n, :n, :n]
+        J = self.field.tensor(x, pars, 1, with_parameters=False)[:n]
+        B = self.field.tensor(x, pars, 2, with_parameters=False)[:n]
         phi0 = self.family_tangent()
         N = self._nonsmooth_term(x, pars)
         if kind == "hopf":

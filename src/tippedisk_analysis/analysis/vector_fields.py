@@ -75,7 +75,13 @@ class CompiledField:
 
     def tensor(self, x, pars, order: int, with_parameters: bool = True) -> np.ndarray:
         """Derivative tensor of ``order`` (1, 2, 3) at one point, shape (n_out, n, ..., n), n = n_state
-        (+ the differentiated parameters if ``with_parameters``); symmetric in the trailing axes."""
+        (+ the differentiated parameters if ``with_parameters``); symmetric in the trailing axes.
+
+        The state-only tensor is compiled only when needed: if the tensor with parameters is compiled
+        already, it is a slice of that one (the second-order tensor with parameters has three times the
+        entries and compiles for seconds on a cold cache)."""
+        if not with_parameters and self.parameters and (order, True) in self._tensors:
+            return self.tensor(x, pars, order)[(slice(None), *([slice(0, self.n_state)] * order))]
         t = self._tensor(order, with_parameters)
         values = self._call(t.cfunc, x, pars)
         out = np.zeros(t.shape)
