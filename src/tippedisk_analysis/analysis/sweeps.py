@@ -48,6 +48,8 @@ from ..errors import Interrupted, ParameterError, TippediskWarning
 CHUNK_PATTERN = "chunk_{:05d}.nc"
 IN_FLIGHT_PER_WORKER = 2  # chunks queued per worker: enough to keep it busy, bounded for huge grids
 MERGE_FACTOR = 3.0  # copies of the result alive at the merge: stored chunks, concatenation, dataset / encoding
+SHOW_BAR_AT_ONCE = 10.0  # [s] estimated work beyond which the progress bar shows from the start
+ANNOUNCE_AFTER = 600.0  # [s] estimated work beyond which one line states the estimate first
 
 
 @dataclass(frozen=True)
@@ -369,9 +371,12 @@ def _run_registered(sweep, bounds, output, client, threads, progress, on_chunk, 
                     results[i] = r
     todo = [i for i in range(len(bounds)) if i not in results]
     workers = 1 if client is not None else (threads or min(len(todo), os.cpu_count() or 1) or 1)
-    _announce(sweep, sum(bounds[i][1] - bounds[i][0] for i in todo), workers, progress)
+    seconds = _announce(sweep, sum(bounds[i][1] - bounds[i][0] for i in todo), workers, progress)
+    # work estimated to be long shows its bar at once, before the first chunk is in; short work only
+    # if it outlasts 2 s
     bar = tqdm(total=sweep.n_points, initial=sum(bounds[i][1] - bounds[i][0] for i in results), unit=sweep.unit,
-               desc=sweep.name, file=sys.stderr, delay=2.0, disable=not progress, dynamic_ncols=True)
+               desc=sweep.name, file=sys.stderr, delay=0.0 if seconds > SHOW_BAR_AT_ONCE else 2.0,
+               disable=not progress, dynamic_ncols=True)
     n_resumed = len(results)
 
     def store(i, res):
@@ -404,13 +409,14 @@ def _run_registered(sweep, bounds, output, client, threads, progress, on_chunk, 
     return ds
 
 
-def _announce(sweep: Sweep, n_todo: int, workers: int, progress: bool) -> None:
-    """One line on stderr before long work (estimated from ``seconds_per_point``)."""
+def _announce(sweep: Sweep, n_todo: int, workers: int, progress: bool) -> float:
+    """One line on stderr before long work; returns the estimated wall time [s] (``seconds_per_point``)."""
     seconds = n_todo * sweep.seconds_per_point / max(workers, 1)
-    if progress and seconds > 600:
+    if progress and seconds > ANNOUNCE_AFTER:
         print(f"{sweep.name}: {n_todo:,} {sweep.unit}s, up to about {resources.human_time(seconds)} on {workers} "
               "worker(s) (estimate); finished chunks are stored, Ctrl-C and the same call resume",
               file=sys.stderr)
+    return seconds
 
 
 def _interrupted(sweep: Sweep, d: Path | None, created: bool, n_stored: int, n_total: int,
