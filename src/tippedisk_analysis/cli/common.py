@@ -109,11 +109,10 @@ _DISK_ATTRS = {"m": "mass", "e": "e", "r": "radius", "A": "A", "B": "B", "C": "C
                "b": "hole_offset", "h": "thickness"}
 
 
-def disk_options_given(args, include_e: bool = True) -> list[str]:
+def disk_options_given(args) -> list[str]:
     """The disk options given on the command line (``--disk`` other than table2 included), for commands that
     refuse them where a dataset already fixes the disk."""
-    given = [DISK_OPTIONS[k] for k, attr in _DISK_ATTRS.items() if getattr(args, attr, None) is not None
-             and (include_e or k != "e")]
+    given = [DISK_OPTIONS[k] for k, attr in _DISK_ATTRS.items() if getattr(args, attr, None) is not None]
     return (["--disk"] if getattr(args, "disk", "table2") != "table2" else []) + given
 
 

@@ -25,7 +25,6 @@ from ..parameters import InitialState, Setup, to_dict
 from ..results import describe, flat_parameters, make_attrs
 
 
-
 @dataclass(frozen=True)
 class CompiledModel:
     model: ode.OdeModel
