@@ -12,11 +12,12 @@ the derivative of the regularised law (2.29). The compiled Jacobian is finite th
 
 Structural zero eigenvalues. The full ODE Model 1 (11 states) has five: x, y, alpha and
 W_friction are cyclic (four zeros), and the spin family is a line of relative equilibria
-(d/dOmega, a fifth). The reduction removes the first four. The fifth remains in the 7x7
-reduced Jacobian J: the family direction d x*/dOmega = sign e_{omega_x} is an exact null
-vector, i.e. the omega_x *column* of J vanishes at every stationary solution. Expanding det(J - s I) along that column gives
-det(J - s I) = -s det(J' - s I) with J' the 6x6 matrix without the omega_x row and column, so
-the six *nontrivial* eigenvalues are those of J' (an exact deflation, no tolerance needed).
+(d/dOmega, a fifth). The reduction removes the first four. The fifth remains in the 7x7 reduced
+Jacobian J: the family direction d x*/dOmega = sign e_{omega_x} is an exact null vector, i.e.
+the omega_x *column* of J vanishes at every stationary solution. Expanding det(J - s I) along
+that column gives det(J - s I) = -s det(J' - s I) with J' the 6x6 matrix without the omega_x
+row and column, so the six *nontrivial* eigenvalues are those of J' (an exact deflation, no
+tolerance needed).
 Perturbations along the family (changing the spin rate) neither grow nor decay.
 
 Classification (``classify``) of the six nontrivial eigenvalues s_k with
