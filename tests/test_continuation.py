@@ -19,23 +19,29 @@ from scipy.integrate import solve_ivp
 from scipy.stats import ortho_group
 
 import tippedisk_analysis as td
-from tippedisk_analysis.analysis import continuation as co
-from tippedisk_analysis.analysis import maps, normal_forms, reduced
+from tippedisk_analysis import dynamics as dy
+from tippedisk_analysis.analysis import maps, reduced
 from tippedisk_analysis.analysis import spin_continuation as sc
 from tippedisk_analysis.analysis import stationary as st
-from tippedisk_analysis.analysis.equilibria import EquilibriumProblem, Parameter
-from tippedisk_analysis.analysis.vector_fields import CompiledField
+from tippedisk_analysis.dynamics import continuation as co
+from tippedisk_analysis.dynamics import normal_forms
+from tippedisk_analysis.dynamics.equilibria import EquilibriumProblem, Parameter
+from tippedisk_analysis.dynamics.switching import branch_directions, switch_branch
+from tippedisk_analysis.dynamics.tensors import Field
 from tippedisk_analysis.models import ode
 from tippedisk_analysis.solvers import taylor
 
 DATA = Path(__file__).resolve().parents[1] / "data"
-P = Parameter("p", 1.0, runtime=((0, 1.0),), derivative=((0, 1.0),))
+
+
+def _problem(name, variables, rhs, parameters, **kw):
+    system = dy.System(name, variables, rhs, parameters)
+    return EquilibriumProblem(system, [Parameter.of(system, p) for p in parameters], **kw)
 
 
 def _planar_problem(fx, fy, bounds=(0.0, 2.0)):
     x, y = hy.make_vars("x", "y")
-    field = CompiledField([fx(x, y, hy.par[0]), fy(x, y, hy.par[0])], [x, y], [hy.par[0]])
-    return EquilibriumProblem(field, [0.0], [P], state_names=("x", "y"), state_scale=(1, 1), bounds={0: bounds})
+    return _problem("planar", [x, y], [fx(x, y, hy.par[0]), fy(x, y, hy.par[0])], {"p": 0.0}, bounds={0: bounds})
 
 
 # ------------------------------------------------------------------------------------------- textbook
@@ -74,7 +80,7 @@ def test_branch_point_and_switching(name, fx, exact):
     trivial = co.continue_branch(prob, np.array([0.0, 0.0, 0.2]), co.Options(ds=0.05, ds_max=0.1))
     (bp,) = trivial.special_points
     assert bp.kind == "branch_point" and abs(bp.u[2] - 1.0) < 1e-10
-    new = co.switch_branch(prob, trivial, 0)
+    new = switch_branch(prob, trivial, 0)
     assert len(new) == 2  # both directions of the emanating branch
     for branch in new:
         u = branch.array("u")
@@ -108,7 +114,7 @@ def test_first_lyapunov_coefficient_equals_the_planar_formula_in_any_orthonormal
     g = (omega * X + cg["xx"] / 2 * X * X + cg["xy"] * X * Y + cg["yy"] / 2 * Y * Y + cg["xxy"] / 2 * X * X * Y
          + cg["yyy"] / 6 * Y ** 3)
     h = -2.0 * Z + X * X  # a stable third direction; f and g do not depend on Z, so l1 is the planar one
-    field = CompiledField([sum(Q[k, i] * v for i, v in enumerate((f, g, h))) for k in range(3)], list(x))
+    field = Field([sum(Q[k, i] * v for i, v in enumerate((f, g, h))) for k in range(3)], list(x))
     origin = np.zeros(3)
     nf = normal_forms.first_lyapunov_coefficient(field.tensor(origin, [], 1), field.tensor(origin, [], 2),
                                                  field.tensor(origin, [], 3))
@@ -122,7 +128,7 @@ def test_first_lyapunov_coefficient_predicts_the_limit_cycle_by_simulation():
     x, y = hy.make_vars("x", "y")
     fx = alpha * x - omega * y + 0.5 * x * y - x * x * x - 0.2 * x * y * y
     fy = omega * x + alpha * y - 0.3 * x * x + 0.4 * y * y - 0.8 * y * y * y
-    field = CompiledField([fx - alpha * x, fy - alpha * y], [x, y])  # the Hopf point itself (alpha = 0)
+    field = Field([fx - alpha * x, fy - alpha * y], [x, y])  # the Hopf point itself (alpha = 0)
     nf = normal_forms.first_lyapunov_coefficient(*(field.tensor(np.zeros(2), [], k) for k in (1, 2, 3)))
     assert nf["l1"] < 0
     ta = hy.taylor_adaptive([(x, fx), (y, fy)], [0.05, 0.0], tol=1e-12)
@@ -178,7 +184,7 @@ def test_line_of_equilibria_normal_form_and_the_elliptic_return():
     x = hy.make_vars("x0", "x1", "x2")
     s_, y1, y2 = (sum(R[m, i] * x[m] for m in range(3)) for i in range(3))
     smooth = [b * (y1 * y1 + y2 * y2), a * s_ * y1 - omega * y2, omega * y1 + a * s_ * y2]
-    field = CompiledField([sum(R[m, i] * v for i, v in enumerate(smooth)) for m in range(3)], list(x))
+    field = Field([sum(R[m, i] * v for i, v in enumerate(smooth)) for m in range(3)], list(x))
     J, B = field.tensor(np.zeros(3), [], 1), field.tensor(np.zeros(3), [], 2)
     phi0 = R[:, 0]
 
@@ -417,13 +423,13 @@ def test_no_branch_of_other_equilibria_emanates_from_the_zero_eigenvalue_point()
     branch = co.continue_branch(prob, np.append(st.stationary_state("inverted", [20.0])[:, 0], 20.0))
     k = [sp.kind for sp in branch.special_points].index("branch_point")
     sp = branch.special_points[k]
-    switch = co.branch_directions(prob, branch.points[sp.index], branch.points[sp.index - 1].tangent)
+    switch = branch_directions(prob, branch.points[sp.index], branch.points[sp.index - 1].tangent)
     assert switch.cokernel.shape[1] == 2
     c = switch.coefficients
     assert np.all(np.abs(c[:, 0, 0]) < 1e-12 * np.abs(c).max())  # the family's tangent solves both equations
     ratios = [c[m, 1, 1] / (2 * c[m, 0, 1]) for m in range(2)]  # each has one other root alpha/beta = -c22/(2 c12)
     assert abs(ratios[0] - ratios[1]) > 0.5 * max(map(abs, ratios))  # and they differ: no common second root
-    assert switch.directions == [] and co.switch_branch(prob, branch, k) == []
+    assert switch.directions == [] and switch_branch(prob, branch, k) == []
 
 
 def test_stored_continuation_datasets_are_reproduced(branch):
@@ -462,11 +468,8 @@ def _bt_normal_form_problem(critical):
     """x' = y, y' = b1 + b2 x + x^2 - x y: fold curve b1 = b2^2/4, Hopf curve b1 = 0 (b2 < 0), BT at (0, 0)."""
     x, y = hy.make_vars("x", "y")
     b1, b2 = hy.par[0], hy.par[1]
-    field = CompiledField([y, b1 + b2 * x + x * x - x * y], [x, y], [b1, b2])
-    params = [Parameter("b1", 1.0, runtime=((0, 1.0),), derivative=((0, 1.0),)),
-              Parameter("b2", 1.0, runtime=((1, 1.0),), derivative=((1, 1.0),))]
-    return EquilibriumProblem(field, [0.0, 0.0], params, state_names=("x", "y"), state_scale=(1, 1),
-                              bounds={0: (-1.0, 1.0), 1: (-1.5, 1.5)}, critical=critical)
+    return _problem("bt_normal_form", [x, y], [y, b1 + b2 * x + x * x - x * y], {"b1": 0.0, "b2": 0.0},
+                    bounds={0: (-1.0, 1.0), 1: (-1.5, 1.5)}, critical=critical)
 
 
 @pytest.mark.parametrize("critical, start", [("zero", (0.5, 0.0, 0.25, -1.0)), ("hopf", (0.0, 0.0, 0.0, -1.0))])
@@ -488,12 +491,9 @@ def test_a_neutral_saddle_is_not_a_double_hopf_point():
     x = hy.make_vars("x0", "x1", "x2", "x3")
     mu, nu = hy.par[0], hy.par[1]
     r2 = x[0] * x[0] + x[1] * x[1]
-    field = CompiledField([mu * x[0] - x[1] - x[0] * r2, x[0] + mu * x[1] - x[1] * r2,
-                           nu * x[2] + 2 * x[3], x[2] + nu * x[3]], list(x), [mu, nu])
-    params = [Parameter("mu", 1.0, runtime=((0, 1.0),), derivative=((0, 1.0),)),
-              Parameter("nu", 1.0, runtime=((1, 1.0),), derivative=((1, 1.0),))]
-    prob = EquilibriumProblem(field, [0.0, -0.5], params, state_names=("x0", "x1", "x2", "x3"),
-                              state_scale=(1, 1, 1, 1), bounds={1: (-0.5, 0.5)}, critical="hopf")
+    prob = _problem("hopf_times_saddle", list(x), [mu * x[0] - x[1] - x[0] * r2, x[0] + mu * x[1] - x[1] * r2,
+                                                   nu * x[2] + 2 * x[3], x[2] + nu * x[3]],
+                    {"mu": 0.0, "nu": -0.5}, bounds={1: (-0.5, 0.5)}, critical="hopf")
     branch = co.continue_branch(prob, np.array([0, 0, 0, 0, 0.0, -0.5]), co.Options(ds=0.02, ds_max=0.05),
                                 tangent=np.array([0, 0, 0, 0, 0, 1.0]))
     assert float(branch.array("u")[-1, 5]) == 0.5 and not branch.special_points, branch.message

@@ -37,10 +37,14 @@ from dataclasses import dataclass
 import heyoka as hy
 import numpy as np
 
+from ..dynamics import Event, System
+from ..dynamics.tensors import Field
 from ..models import ode
-from .vector_fields import CompiledField
 
 STATE_NAMES = ("beta", "gamma", "u_x", "u_y", "omega_x", "omega_y", "omega_z")
+STATE_UNITS = {"beta": "rad", "gamma": "rad", "u_x": "m s-1", "u_y": "m s-1", "omega_x": "rad s-1",
+               "omega_y": "rad s-1", "omega_z": "rad s-1"}
+STATE_SCALE = (1.0, 1.0, 0.1, 0.1, 10.0, 10.0, 10.0)  # typical magnitudes: Newton steps, continuation metric
 N_STATE = len(STATE_NAMES)
 # runtime parameters the derivative tensors differentiate by (continuation parameters and the inertia)
 TENSOR_PARAMETERS = ("mu", "eps", "e", "A", "B", "C")
@@ -96,6 +100,43 @@ def reduced_system(split_slip_norm: bool = False) -> ReducedSystem:
     return ReducedSystem(list(variables), rhs, alpha_dot, reduce(out["lambda_N"]),
                          [reduce(out["slip_x"]), reduce(out["slip_y"])], reduce(out["z_S"]),
                          reduce(out["E_kin"] + out["E_pot"]))
+
+
+@functools.lru_cache(maxsize=None)
+def system(frictionless: bool = False) -> System:
+    """The reduced tippedisk as a :class:`~tippedisk_analysis.dynamics.System`: 7 states, the 11 runtime
+    parameters of ode.PARAMETER_NAMES (default: Tables 1-2, Sect. 6), observables z_S, E_tot, lambda_N,
+    alpha_dot (the spin rate the families are parametrised by) and the slip magnitude, terminal events
+    ``fell`` (tilt down to fall_angle) and ``lift_off`` (lambda_N through 0).
+
+    With friction: two trivial Floquet multipliers, the flow direction and the spin family. ``frictionless``
+    (for mu = 0): the disk is conservative; the first integrals E_tot and L_z (the vertical angular momentum
+    about S: the contact force is vertical, so it has no moment about the vertical through S) are declared
+    and the trivial multipliers are three (flow, energy, angular momentum)."""
+    red = reduced_system()
+    beta = red.variables[0]
+    observables = {"z_S": (red.z_S, "m"), "E_tot": (red.E_tot, "J"), "lambda_N": (red.lambda_N, "N"),
+                   "alpha_dot": (red.alpha_dot, "rad s-1"),
+                   "slip": (hy.sqrt(red.slip[0] ** 2 + red.slip[1] ** 2), "m s-1")}
+    events = (Event("fell", hy.sin(beta) - hy.sin(ode.P["fall_angle"])), Event("lift_off", red.lambda_N))
+    integrals = {"E_tot": red.E_tot, "L_z": _vertical_angular_momentum(red.variables)} if frictionless else {}
+    defaults = ode.parameter_vector()
+    return System("tippedisk_reduced" + ("_frictionless" if frictionless else ""), red.variables, red.rhs,
+                  dict(zip(ode.PARAMETER_NAMES, defaults)), state_names=STATE_NAMES, state_scale=STATE_SCALE,
+                  observables=observables, integrals=integrals, events=events, n_trivial=3 if frictionless else 2,
+                  units=STATE_UNITS, compact_mode=True,
+                  description="reduced tippedisk, ODE Model 1 (" + ("frictionless: conservative" if frictionless
+                              else "smooth Coulomb friction") + ", bilateral contact)")
+
+
+def _vertical_angular_momentum(variables):
+    """e_z^I . Theta_S omega: e_z^I in body components (sin g sin b, cos g sin b, cos b) ((3.1): G_from_I then
+    B_from_G), Theta_S = diag(A, B - m e^2, C - m e^2) (about S)."""
+    beta, gamma, _ux, _uy, w_x, w_y, w_z = variables
+    m, e = ode.P["m"], ode.P["e"]
+    sb = hy.sin(beta)
+    return (ode.P["A"] * w_x * hy.sin(gamma) * sb + (ode.P["B"] - m * e * e) * w_y * hy.cos(gamma) * sb
+            + (ode.P["C"] - m * e * e) * w_z * hy.cos(beta))
 
 
 @functools.lru_cache(maxsize=None)
@@ -181,12 +222,10 @@ def full_from_reduced(state, *, alpha: float = 0.0) -> np.ndarray:
     return np.array([0.0, 0.0, alpha, beta, gamma, ca * u_x - sa * u_y, sa * u_x + ca * u_y, w_x, w_y, w_z, 0.0])
 
 
-@functools.lru_cache(maxsize=None)
-def field() -> CompiledField:
+def field() -> Field:
     """The reduced right-hand side (7 outputs) and alpha_dot (output 7) with exact derivative tensors
     with respect to the 7 states and the runtime parameters TENSOR_PARAMETERS (in that order)."""
-    red = reduced_system()
-    return CompiledField([*red.rhs, red.alpha_dot], red.variables, [ode.P[name] for name in TENSOR_PARAMETERS])
+    return system().field(("alpha_dot",), TENSOR_PARAMETERS)
 
 
 def parameter_derivative_index(name: str) -> int:
@@ -195,11 +234,10 @@ def parameter_derivative_index(name: str) -> int:
 
 
 @functools.lru_cache(maxsize=None)
-def _split_fields() -> tuple[CompiledField, CompiledField]:
+def _split_fields() -> tuple[Field, Field]:
     split = reduced_system(split_slip_norm=True)
     red = reduced_system()
-    return (CompiledField(split.rhs, split.variables, [hy.par[SLIP_NORM_INDEX]]),
-            CompiledField(red.slip, red.variables))
+    return Field(split.rhs, split.variables, [hy.par[SLIP_NORM_INDEX]]), Field(red.slip, red.variables)
 
 
 def nonsmooth_split(state, pars) -> tuple[np.ndarray, np.ndarray]:

@@ -31,9 +31,10 @@ from ..errors import DatasetError, ParameterError
 from ..models import ode
 from ..parameters import Setup, to_dict
 from ..results import config_of, make_attrs
-from . import continuation, reduced, stability
+from ..dynamics import continuation
+from ..dynamics.equilibria import EquilibriumProblem, Parameter
+from . import reduced, stability
 from . import stationary as st
-from .equilibria import EquilibriumProblem, Parameter
 
 PARAMETERS = {  # name: (units, long_name, scale of the arclength metric, default bounds of curves)
     "omega": ("rad s-1", "spin rate alpha_dot = Omega", 10.0, (0.0, 200.0)),
@@ -42,7 +43,7 @@ PARAMETERS = {  # name: (units, long_name, scale of the arclength metric, defaul
     "e": ("m", "eccentricity e (A, B, C about G held fixed)", 1e-3, (0.0, 0.01)),
     "inertia": ("1", "common scale of the inertia A, B, C about G (1: Table 2)", 1.0, (0.5, 2.0)),
 }
-STATE_SCALE = (1.0, 1.0, 0.1, 0.1, 10.0, 10.0, 10.0)  # rad, rad, m/s, m/s, rad/s x 3
+STATE_SCALE = reduced.STATE_SCALE
 SPECIAL_KINDS = {"bound": 0, "fold": 1, "branch_point": 2, "hopf": 3, "bogdanov_takens": 4, "zero_hopf": 5,
                  "double_hopf": 6, "bautin": 7, "cusp": 8, "line_saddle_change": 9, "line_focus_node": 10}
 CLASSES = {"": 0, "elliptic": 1, "hyperbolic": 2, "repelling_node": 3, "attracting_node": 4, "supercritical": 5,
@@ -58,14 +59,12 @@ def _parameter(name: str, setup: Setup) -> Parameter:
                              "disk's geometry does not allow (its hole fixes them); give the disk by its values "
                              "(Disk(m, e, r, A, B, C); --disk given or table2)")
     if name == "omega":
-        return Parameter(name, scale, pin=0)
+        return Parameter(name, scale, pin=0)  # the pinned observable alpha_dot
     if name == "inertia":
         d = setup.disk
-        base = {"A": d.A, "B": d.B, "C": d.C}
-        return Parameter(name, scale, runtime=tuple((ode.PARAMETER_NAMES.index(k), v) for k, v in base.items()),
-                         derivative=tuple((reduced.TENSOR_PARAMETERS.index(k), v) for k, v in base.items()))
-    return Parameter(name, scale, runtime=((ode.PARAMETER_NAMES.index(name), 1.0),),
-                     derivative=((reduced.TENSOR_PARAMETERS.index(name), 1.0),))
+        return Parameter(name, scale, runtime=tuple((ode.PARAMETER_NAMES.index(k), v) for k, v in
+                                                    (("A", d.A), ("B", d.B), ("C", d.C))))
+    return Parameter(name, scale, runtime=((ode.PARAMETER_NAMES.index(name), 1.0),))
 
 
 def base_value(name: str, setup: Setup) -> float:
@@ -110,8 +109,8 @@ def problem(free: list[str], setup: Setup | None = None, *, branch: str = "inver
         if not (math.isfinite(low) and math.isfinite(high) and low < high):
             raise ParameterError(f"bounds of {name}: give finite LOW < HIGH, not {low}:{high}")
     pars = ode.parameter_vector(setup, slip_smoothing=slip_smoothing)
-    return EquilibriumProblem(reduced.field(), pars, params, state_names=reduced.STATE_NAMES,
-                              state_scale=STATE_SCALE, pin_values={} if "omega" in free else {0: float(omega)},
+    return EquilibriumProblem(reduced.system(), params, pars=pars, pins=("alpha_dot",), state_scale=STATE_SCALE,
+                              pin_values={} if "omega" in free else {0: float(omega)},
                               bounds={free.index(k): v for k, v in bounds.items()}, family=reduced.OMEGA_X_INDEX,
                               critical=critical, nonsmooth=reduced.nonsmooth_split, project=_onto_family(branch),
                               family_sign=st.branch_sign(branch))  # d x*/d Omega = sign e_omega_x

@@ -37,15 +37,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..defaults import EIG_ATOL, EIG_RTOL
+from ..dynamics.spectra import STABILITY_FLAGS, classify  # noqa: F401 (stability.classify, .STABILITY_FLAGS)
 from . import stationary as st
 from .reduced import N_STATE, OMEGA_X_INDEX, jacobian
 
 N_EIG = N_STATE - 1  # nontrivial eigenvalues (structural zero of the spin family removed)
 KEEP = [i for i in range(N_STATE) if i != OMEGA_X_INDEX]
-
-STABILITY_FLAGS = {"stable": 0, "marginal": 1, "unstable": 2}
-
 
 @dataclass(frozen=True)
 class Spectrum:
@@ -86,18 +83,6 @@ def eigen(J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     full[OMEGA_X_INDEX] = np.where(np.isfinite(c), c, 0.0)
     full /= np.linalg.norm(full, axis=0)
     return vals, full
-
-
-def classify(eigenvalues: np.ndarray, atol: float = EIG_ATOL, rtol: float = EIG_RTOL):
-    """(stability int8, n_unstable, max_real_eig) of nontrivial eigenvalues (..., 6)."""
-    ev = np.asarray(eigenvalues)
-    tol = atol + rtol * np.max(np.abs(ev), axis=-1)
-    re = ev.real
-    max_re = re.max(axis=-1)
-    n_unstable = np.sum(re > tol[..., None], axis=-1)
-    stability = np.where(n_unstable > 0, STABILITY_FLAGS["unstable"],
-                         np.where(max_re < -tol, STABILITY_FLAGS["stable"], STABILITY_FLAGS["marginal"]))
-    return stability.astype(np.int8), n_unstable.astype(np.int32), max_re
 
 
 def spectrum(branch: str, omega, pars) -> Spectrum:

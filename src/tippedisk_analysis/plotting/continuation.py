@@ -14,8 +14,9 @@ from .registry import figure
 UNITS = {"omega": "rad s-1", "eps": "m s-1", "mu": "1", "e": "m", "inertia": "1"}
 
 
-def axis_label(name: str) -> str:
-    return labels.axis_label(name, UNITS.get(name, ""))
+def axis_label(name: str, ds: xr.Dataset | None = None) -> str:
+    units = UNITS.get(name) or (ds[name].attrs.get("units", "") if ds is not None and name in ds else "")
+    return labels.axis_label(name, "" if units == "1" and name not in UNITS else units)
 
 
 def _specials(ds: xr.Dataset):
@@ -58,7 +59,7 @@ def continuation_figure(ds: xr.Dataset, observable: str | None = None, backgroun
         ax2.plot(x, ds["eig_real"].values[:, k], ".", ms=2)
     ax2.axhline(0.0, color="0.6", lw=0.8)
     ax2.set_yscale("symlog", linthresh=0.1)
-    ax2.set(xlabel=axis_label(name), ylabel=r"Re $s_k$ [1/s]")
+    ax2.set(xlabel=axis_label(name, ds), ylabel=r"Re $s_k$" + (" [1/s]" if "system" not in ds.attrs else ""))
     for k, (label, index) in enumerate(_specials(ds)):
         for a, yy in ((ax, y[index]), (ax2, 0.0)):
             a.plot(x[index], yy, "o", color="tab:red", ms=5, zorder=3)
@@ -70,8 +71,12 @@ def continuation_figure(ds: xr.Dataset, observable: str | None = None, backgroun
 
 
 def _fixed_text(ds: xr.Dataset, parameters) -> str:
-    fixed = [n for n in ("omega", "eps", "mu", "e", "inertia") if n not in parameters]
-    return "Continuation, " + ", ".join(f"{n} = {float(ds[n].values[0]):.4g}" for n in fixed)
+    """The parameters held fixed: a generic System's (attribute parameter_names), or the tippedisk's."""
+    names = ds.attrs.get("parameter_names", "omega eps mu e inertia").split()
+    fixed = [n for n in names if n not in parameters and n in ds]
+    system = ds.attrs.get("system", "")
+    return f"Continuation{' of ' + system if system else ''}, " + ", ".join(
+        f"{n} = {float(ds[n].values[0]):.4g}" for n in fixed)
 
 
 def curve_figure(curves: list, background=None, ax=None):
@@ -101,11 +106,13 @@ def curve_figure(curves: list, background=None, ax=None):
         for label, index in _specials(ds):
             ax.plot(x[index], y[index], "s", color="k", ms=5)
             ax.annotate(label, (x[index], y[index]), textcoords="offset points", xytext=(5, 4), fontsize=8)
-    ax.set(xlabel=axis_label(parameters[0]), ylabel=axis_label(parameters[1]),
+    ax.set(xlabel=axis_label(parameters[0], curves[0]), ylabel=axis_label(parameters[1], curves[0]),
            title="Hopf (solid), zero-eigenvalue (dashed), neutral saddle (dotted)" + (
                "; shaded: stable" if background is not None else ""))
     ax.legend(fontsize=8, loc="best")
     if own:
         finite = np.concatenate([np.c_[d[parameters[0]].values, d[parameters[1]].values] for d in curves])
-        ax.set_xlim(np.nanmin(finite[:, 0]) - 1, np.nanmax(finite[:, 0]) + 1)
+        low, high = np.nanmin(finite[:, 0]), np.nanmax(finite[:, 0])
+        margin = 1.0 if parameters[0] == "omega" else 0.03 * (high - low or 1.0)  # 1 rad/s for the spin
+        ax.set_xlim(low - margin, high + margin)
     return fig

@@ -1,0 +1,487 @@
+"""Pseudo-arclength continuation (PALC) of solution curves F(u) = 0, with detection and location
+of special points (branch switching: :mod:`.switching`). Generic: it knows nothing of the disk.
+
+A :class:`Problem` supplies the unknowns u (states, then parameters), the residual F(u) and its
+Jacobian F_u, the square "state Jacobian" whose eigenvalues decide stability (for a system with
+a family of equilibria, the matrix with the family's structural zero deflated), and, for branch
+switching, second directional derivatives. F may have more rows than n - 1 if it is consistent
+(a family of equilibria makes rows dependent): steps are least-squares (Gauss-Newton) steps,
+which converge quadratically to zero-residual solutions.
+
+Algorithm (as in AUTO / BifurcationKit): scaled unknowns v = u / scale; tangent t = null vector
+of F_u diag(scale) (smallest right singular vector), oriented along the previous one; predictor
+v_k + ds t_k; corrector: Gauss-Newton on [F(v); t_k . (v - v_k) - ds]; adaptive ds (grow after
+an easy correction, halve after a failure, stop below ds_min with a status); stop at parameter
+bounds (located exactly), after max_points, or on a singular corrector.
+
+Special points (test functions on the eigenvalues s_i of the state Jacobian):
+
+* ``zero``: det changes sign (a real eigenvalue through 0). It is a **fold** (limit point) if the
+  tangent's parameter component changes sign too, otherwise a **branch point**;
+* ``hopf``: prod_{i<j} (s_i + s_j) changes sign (the bialternate product) and the pair crossing
+  the imaginary axis is complex (a real pair with s_i + s_j = 0, a neutral saddle, is skipped).
+
+Each is located along the arclength by Brent's method on a smooth function in eigenvalue units
+(the real eigenvalue nearest 0; the real part of the complex pair nearest the imaginary axis;
+the tangent's parameter component for folds) to |value| < ``locate_tol``, and inserted into
+the branch as its own point. Problems may define their own test functions (``tests``,
+``located_value``, ``accept``; e.g. on Floquet multipliers), a moving reference
+(``set_reference``) and special points at which a branch ends (``terminal``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import brentq
+
+from ..errors import ParameterError
+
+START_TOL = 1e-6  # a start point's residual, relative to the size of its terms (it is corrected first)
+EASY_ITERATIONS = 3  # the step grows after a correction in at most this many Newton iterations
+ZERO_RATIO = 1e-3  # a located test function is this much smaller than at the ends (a pole or a jump is not)
+
+
+@dataclass(frozen=True)
+class Options:
+    """Step control and tolerances, in scaled unknowns (u / scale)."""
+
+    ds: float = 0.02  # first step
+    ds_min: float = 1e-8
+    ds_max: float = 0.2
+    max_points: int = 500
+    tol: float = 1e-11  # corrector: largest scaled Newton step of the last iteration
+    max_newton: int = 8
+    locate_tol: float = 1e-10  # |test function| of a located special point (eigenvalue units)
+    growth: float = 1.5  # step growth after a correction in <= 3 iterations
+
+    def __post_init__(self):
+        for name in ("ds", "ds_min", "ds_max", "tol", "locate_tol", "growth"):
+            value = getattr(self, name)
+            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
+                raise ParameterError(f"continuation option {name} = {value!r} must be a positive number")
+        if not self.ds_min <= abs(self.ds) <= self.ds_max:
+            raise ParameterError(f"step ds = {self.ds} must lie in [ds_min, ds_max] = [{self.ds_min}, {self.ds_max}]")
+        if int(self.max_points) != self.max_points or self.max_points < 2:
+            raise ParameterError(f"max_points = {self.max_points!r} must be an integer >= 2")
+        if not (isinstance(self.max_newton, int) and self.max_newton >= 1):
+            raise ParameterError(f"max_newton = {self.max_newton!r} must be an integer >= 1")
+        if self.growth < 1:
+            raise ParameterError(f"growth = {self.growth!r} must be >= 1 (the step grows after easy corrections)")
+
+
+class Problem:
+    """Interface of a continuation problem (subclass and implement the methods).
+
+    names: unknowns (states, then parameters); scale: their typical magnitudes (the arclength
+    metric); parameters: indices of the free parameters among the unknowns (the first one's
+    tangent component is the fold test); bounds: {index: (low, high)} where a branch ends.
+    """
+
+    names: tuple[str, ...]
+    scale: np.ndarray
+    parameters: tuple[int, ...]
+    bounds: dict
+    terminal: frozenset = frozenset()  # kinds of special points at which a branch ends (e.g. a branch of
+    # periodic orbits at the Hopf point where its amplitude vanishes)
+
+    def residual(self, u: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+    def jacobian(self, u: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+    def state_jacobian(self, u: np.ndarray) -> np.ndarray:
+        """Square matrix whose eigenvalues decide stability and the test functions."""
+        raise NotImplementedError
+
+    def second_derivative(self, u: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """F_uu[a, b] (for branch switching)."""
+        raise NotImplementedError
+
+    def describe(self, kind: str, u: np.ndarray) -> dict:
+        """Normal-form coefficients etc. of a located special point (optional)."""
+        return {}
+
+    def project(self, u: np.ndarray) -> np.ndarray:
+        """Map an iterate onto a known solution manifold (default: none). A family of equilibria
+        known in closed form keeps its states exact this way."""
+        return u
+
+    def set_reference(self, u: np.ndarray) -> None:
+        """Called with the start guess, the corrected start and every accepted point of a branch (default:
+        nothing). Problems with a moving reference, e.g. the phase condition of periodic orbits relative to
+        the last orbit found (AUTO, BifurcationKit), update it here; located special points and bound points
+        are computed with the reference of the regular point before them."""
+
+    def tests(self, point: "Point") -> dict[str, float]:
+        """Test functions whose sign changes mark special points (default: equilibrium branches)."""
+        return {"fold": point.tangent[self.parameters[0]], "branch_point": _zero_test(point.eigenvalues),
+                "hopf": _hopf_test(point.eigenvalues)}
+
+    def located_value(self, kind: str, point: "Point") -> float:
+        """A smooth function vanishing at the special point, in eigenvalue units where possible
+        (used to locate it; NaN if undefined there)."""
+        if kind == "fold":
+            return point.tangent[self.parameters[0]]
+        if kind == "branch_point":
+            return _nearest_real(point.eigenvalues)
+        if kind == "hopf":
+            return _nearest_pair(point.eigenvalues).real
+        return self.tests(point)[kind]
+
+    def accept(self, kind: str, point: "Point", value: float, options: "Options") -> bool:
+        """Whether a located point is the special point (a Hopf test zero may be a neutral saddle)."""
+        if kind == "hopf":
+            return math.isfinite(value) and abs(value) <= max(options.locate_tol, 1e-8 * np.abs(point.eigenvalues).max())
+        return True
+
+
+@dataclass
+class Point:
+    u: np.ndarray
+    tangent: np.ndarray  # unit tangent in scaled unknowns
+    arclength: float  # scaled arclength from the start
+    eigenvalues: np.ndarray  # of the state Jacobian, sorted by real part (descending)
+    newton_iterations: int
+    special: str = ""  # kind if this point is a located special point
+
+
+@dataclass
+class SpecialPoint:
+    kind: str  # a key of LABELS
+    index: int  # position in Branch.points
+    u: np.ndarray
+    eigenvalues: np.ndarray
+    value: float  # the located test function
+    data: dict = field(default_factory=dict)  # frequency, normal-form coefficients, ...
+    label: str = ""  # e.g. HOPF1, set when the branch is finished
+
+
+@dataclass
+class Branch:
+    points: list
+    special_points: list
+    status: str  # "completed" (bound or max_points), "corrector_failed", "singular"
+    message: str
+    options: Options
+
+    def array(self, attribute: str) -> np.ndarray:
+        return np.array([getattr(p, attribute) for p in self.points])
+
+
+# ----------------------------------------------------------------------------- linear algebra
+
+
+def _eigenvalues(matrix: np.ndarray) -> np.ndarray:
+    ev = np.linalg.eigvals(matrix)
+    return ev[np.argsort(-ev.real, kind="stable")]
+
+
+def _tangent(problem: Problem, u: np.ndarray, previous: np.ndarray | None) -> np.ndarray:
+    A = problem.jacobian(u) * problem.scale[None, :]
+    t = np.linalg.svd(A)[2][-1]
+    if previous is not None and t @ previous < 0:
+        t = -t
+    return t
+
+
+def _zero_test(ev: np.ndarray) -> float:
+    """det = prod s_i (real): changes sign when a real eigenvalue crosses 0."""
+    return float(np.prod(ev).real)
+
+
+def _hopf_test(ev: np.ndarray) -> float:
+    """prod_{i<j} (s_i + s_j) (real): the determinant of the bialternate product."""
+    i, j = np.triu_indices(len(ev), 1)
+    return float(np.prod(ev[i] + ev[j]).real)
+
+
+def _nearest_real(ev: np.ndarray) -> float:
+    real = ev[np.abs(ev.imag) <= 1e-12 * max(1.0, np.abs(ev).max())].real
+    return float(real[np.argmin(np.abs(real))]) if real.size else math.nan
+
+
+def _nearest_pair(ev: np.ndarray) -> complex:
+    pairs = ev[ev.imag > 1e-12 * max(1.0, np.abs(ev).max())]
+    return complex(pairs[np.argmin(np.abs(pairs.real))]) if pairs.size else complex(math.nan)
+
+
+# ----------------------------------------------------------------------------- corrector
+
+
+def correct(problem: Problem, u_guess: np.ndarray, constraint: tuple[np.ndarray, np.ndarray, float] | None,
+            options: Options) -> tuple[np.ndarray | None, int]:
+    """Gauss-Newton on F(u) = 0 (+ the arclength constraint t . (v - v0) = ds in scaled unknowns).
+
+    Converged when the last step is below options.tol (relative) and every residual row is at the
+    round-off level of its terms (1e-9 sum_j |A_ij v_j|). Returns (u, iterations); u None if not
+    converged within options.max_newton steps.
+    """
+    scale = problem.scale
+
+    def system(v):
+        u = v * scale
+        F = problem.residual(u)
+        A = problem.jacobian(u) * scale[None, :]
+        if constraint is not None:
+            t, v0, ds = constraint
+            F = np.append(F, t @ (v - v0) - ds)
+            A = np.vstack([A, t])
+        return F, A
+
+    v = u_guess / scale
+    for it in range(1, options.max_newton + 1):
+        F, A = system(v)
+        if not (np.all(np.isfinite(F)) and np.all(np.isfinite(A))):
+            return None, it
+        step = np.linalg.lstsq(A, -F, rcond=None)[0]
+        v = problem.project((v + step) * scale) / scale
+        if np.max(np.abs(step)) <= options.tol * (1.0 + np.max(np.abs(v))):
+            F, A = system(v)
+            if np.all(np.abs(F) <= 1e-9 * (1.0 + np.abs(A) @ np.abs(v))):
+                return v * scale, it
+    return None, options.max_newton
+
+
+def solve_at(problem: Problem, u_guess: np.ndarray, index: int, value: float, options: Options = Options()):
+    """The solution with unknown ``index`` fixed at ``value`` (e.g. a curve's point at a given parameter
+    value), by Gauss-Newton from ``u_guess``; None if it does not converge."""
+    e = np.zeros(len(u_guess))
+    e[index] = 1.0
+    return correct(problem, np.asarray(u_guess, dtype=float), (e, np.zeros(len(u_guess)), value / problem.scale[index]),
+                   options)[0]
+
+
+def _step_to(problem, point: Point, sigma: float, options: Options) -> np.ndarray | None:
+    """The branch point at scaled arclength sigma beyond ``point`` (predictor + corrector)."""
+    return _step(problem, point, sigma, options)[0]
+
+
+def _step(problem, point: Point, sigma: float, options: Options) -> tuple[np.ndarray | None, int]:
+    """(u, corrector iterations) at scaled arclength sigma beyond ``point``."""
+    v0 = point.u / problem.scale
+    return correct(problem, (v0 + sigma * point.tangent) * problem.scale, (point.tangent, v0, sigma), options)
+
+
+def _make_point(problem, u, previous_tangent, arclength, iterations, special="") -> Point:
+    return Point(u, _tangent(problem, u, previous_tangent), arclength,
+                 _eigenvalues(problem.state_jacobian(u)), iterations, special)
+
+
+# ----------------------------------------------------------------------------- the branch
+
+
+def continue_branch(problem: Problem, u0: np.ndarray, options: Options = Options(), direction: int = 1,
+                    tangent: np.ndarray | None = None, detect: bool = True,
+                    on_point: Callable[[Point], None] | None = None) -> Branch:
+    """Continue the solution branch through u0 (corrected first) in ``direction`` (+1: the parameter
+    increases initially, -1: decreases; ignored if ``tangent`` is given)."""
+    u0 = np.asarray(u0, dtype=float)
+    if not np.all(np.isfinite(u0)):
+        raise ParameterError("the start point has non-finite entries; give finite values")
+    problem.set_reference(u0)
+    F = problem.residual(u0)
+    allowed = START_TOL * (1.0 + np.abs(problem.jacobian(u0)) @ np.abs(u0))
+    if not np.all(np.abs(F) <= allowed):
+        worst = int(np.argmax(np.abs(F) / allowed))
+        raise ParameterError(f"the start point is not a solution (residual {abs(F[worst]):.3g} in equation {worst}); "
+                             "give a point on the branch, e.g. a stationary solution or a point of a dataset")
+    u, iterations = correct(problem, u0, None, options)
+    if u is None:
+        raise ParameterError("Newton's method did not converge from the start point; give a point on the branch")
+    problem.set_reference(u)
+    t = _tangent(problem, u, tangent)
+    if tangent is None and direction * t[problem.parameters[0]] < 0:
+        t = -t
+    points = [Point(u, t, 0.0, _eigenvalues(problem.state_jacobian(u)), iterations)]
+    special: list[SpecialPoint] = []
+    dropped: list[str] = []  # test-function sign changes that were not zeros
+    ds, status, message = abs(options.ds), "completed", ""
+    while True:
+        if len(points) >= options.max_points:
+            message = f"stopped after max_points = {options.max_points} points"
+            break
+        last = points[-1]
+        u_new, iterations = _step(problem, last, ds, options)
+        if u_new is None:
+            ds *= 0.5
+            if ds < options.ds_min:
+                status = "corrector_failed"
+                message = (f"the corrector failed below ds_min = {options.ds_min:g} at {_where(problem, last.u)}; "
+                           "a singular point or the end of the branch")
+                break
+            continue
+        new = _make_point(problem, u_new, last.tangent, last.arclength + ds, iterations)
+        crossed = _first_bound_crossed(problem, last.u, new.u)
+        if crossed is not None:
+            end = _locate_bound(problem, last, ds, crossed, options)
+            if end is None:  # the corrector fails between the last point and the bound: try a shorter step
+                ds *= 0.5
+                if ds < options.ds_min:
+                    status, message = "corrector_failed", (f"the corrector failed before the bound "
+                                                           f"{problem.names[crossed[0]]} = {crossed[1]:g}")
+                    break
+                continue
+            if detect:
+                _detect_and_locate(problem, last, end, special, points, options, dropped)
+            points.append(end)
+            message = f"reached the bound {problem.names[crossed[0]]} = {crossed[1]:g}"
+            break
+        if detect:
+            n_special = len(special)
+            _detect_and_locate(problem, last, new, special, points, options, dropped)
+            ends = [sp for sp in special[n_special:] if sp.kind in problem.terminal]
+            if ends:  # the branch ends at the first terminal special point: drop what lies beyond it
+                del points[ends[0].index + 1:]
+                del special[special.index(ends[0]) + 1:]
+                message = f"ended at a {ends[0].kind} point at {_where(problem, ends[0].u)}"
+                break
+        points.append(new)
+        problem.set_reference(new.u)
+        if on_point is not None:
+            on_point(new)
+        if iterations <= EASY_ITERATIONS:
+            ds = min(options.ds_max, ds * options.growth)
+    if dropped:
+        message += (f"; {len(dropped)} sign change(s) of a test function not located as a zero (a pole, a "
+                    f"discontinuity or a corrector failure): {', '.join(dropped)}")
+    _label(special)
+    return Branch(points, special, status, message, options)
+
+
+def _where(problem: Problem, u: np.ndarray) -> str:
+    return ", ".join(f"{problem.names[i]} = {u[i]:.10g}" for i in problem.parameters)
+
+
+def _first_bound_crossed(problem: Problem, u_old, u_new):
+    """(index, bound) of a bound the step leaves the box through, else None (a start on a bound may move in)."""
+    for index, (low, high) in problem.bounds.items():
+        if u_new[index] <= low < u_old[index] or (u_new[index] <= low and u_new[index] < u_old[index]):
+            return index, low
+        if u_new[index] >= high > u_old[index] or (u_new[index] >= high and u_new[index] > u_old[index]):
+            return index, high
+    return None
+
+
+def _locate_bound(problem, last: Point, ds: float, crossed, options) -> Point | None:
+    """The branch point on the bound (Brent on the arclength); None if the corrector fails there."""
+    index, bound = crossed
+
+    def g(sigma):
+        u = _step_to(problem, last, sigma, options)
+        return (u[index] - bound) if u is not None else math.nan
+
+    try:
+        sigma = brentq(g, 0.0, ds, xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200) if g(0.0) != 0 else 0.0
+    except ValueError:  # the corrector failed inside the step
+        return None
+    u = _step_to(problem, last, sigma, options)
+    if u is None:
+        return None
+    u[index] = bound  # exact: the corrector solved to round-off
+    return _make_point(problem, u, last.tangent, last.arclength + sigma, 0, "bound")
+
+
+# ----------------------------------------------------------------------------- special points
+
+
+def _detect_and_locate(problem, last: Point, new: Point, special: list, points: list, options: Options,
+                       dropped: list) -> None:
+    """Test functions between ``last`` and ``new``; located points are appended to ``points``, sign
+    changes that are not zeros (poles, jumps) or could not be located are named in ``dropped``."""
+    before, after = problem.tests(last), problem.tests(new)
+    changed = [kind for kind in before if kind in after and before[kind] * after[kind] < 0]
+    if "fold" in changed and "branch_point" in changed:
+        changed.remove("branch_point")  # a real eigenvalue through 0 with the tangent turning: a fold
+    located = []
+    for kind in changed:
+        found = _locate(problem, kind, last, new, options)
+        if found is None:
+            dropped.append(f"{kind} near {_where(problem, new.u)}")
+        elif found is not REJECTED:
+            located.append(found)
+    for point, value, kind in sorted(located, key=lambda item: item[0].arclength):
+        points.append(point)
+        special.append(SpecialPoint(kind, len(points) - 1, point.u, point.eigenvalues, value,
+                                    problem.describe(kind, point.u)))
+
+
+def _locate(problem, kind: str, last: Point, new: Point, options: Options):
+    """Brent on the arclength between two points, on the problem's smooth located_value if it
+    brackets the zero, else on the detecting test function; None if the problem rejects the point."""
+    cache: dict[float, Point | None] = {}
+
+    span = new.arclength - last.arclength
+
+    def at(sigma):
+        if sigma not in cache:
+            u = _step_to(problem, last, sigma, options)
+            if u is None:  # approach from the other end
+                u = _step_to(problem, new, sigma - span, options)
+            cache[sigma] = None if u is None else _make_point(problem, u, last.tangent, last.arclength + sigma, 0)
+        return cache[sigma]
+
+    def smooth(sigma):
+        point = at(sigma)
+        return math.nan if point is None else problem.located_value(kind, point)
+
+    def detecting(sigma):
+        point = at(sigma)
+        return math.nan if point is None else problem.tests(point)[kind]
+
+    for f in (smooth, detecting):
+        ends = f(0.0), f(span)
+        if all(map(math.isfinite, ends)) and ends[0] * ends[1] < 0:
+            break
+    else:
+        return None
+    try:
+        sigma = brentq(f, 0.0, span, xtol=1e-14 * max(1.0, span), rtol=4 * np.finfo(float).eps, maxiter=200)
+    except ValueError:  # the corrector failed inside the interval
+        return None
+    if not abs(f(sigma)) <= ZERO_RATIO * max(map(abs, ends)):
+        return None  # the sign changed through a pole or a jump, not a zero
+    point = at(sigma)
+    value = smooth(sigma)
+    if not problem.accept(kind, point, value, options):
+        return REJECTED  # e.g. a neutral saddle where a Hopf test vanishes: not a special point, not an error
+    point.special = kind
+    return point, float(value), kind
+
+
+REJECTED = object()  # _locate: a zero the problem declines (no special point, nothing to report)
+
+
+LABELS = {"fold": "LP", "branch_point": "BP", "hopf": "HOPF", "bogdanov_takens": "BT", "zero_hopf": "ZH",
+          "double_hopf": "HH", "bautin": "GH", "cusp": "CP", "line_saddle_change": "LS",
+          "line_focus_node": "LF", "period_doubling": "PD", "neimark_sacker": "NS", "homoclinic": "HC"}
+
+
+def _label(special: list) -> None:
+    counts: dict[str, int] = {}
+    for sp in special:
+        counts[sp.kind] = counts.get(sp.kind, 0) + 1
+        sp.label = LABELS.get(sp.kind, sp.kind.upper()) + str(counts[sp.kind])
+
+
+def continue_both_ways(problem: Problem, u0: np.ndarray, options: Options = Options(), detect: bool = True) -> Branch:
+    """The branch through u0 in both directions, as one branch ordered from one end to the other
+    (arclength 0 at u0, negative on the first part)."""
+    backward = continue_branch(problem, u0, options, direction=-1, detect=detect)
+    forward = continue_branch(problem, u0, options, tangent=-backward.points[0].tangent, detect=detect)
+    n_back = len(backward.points)
+    points = []
+    for p in reversed(backward.points):
+        points.append(Point(p.u, -p.tangent, -p.arclength, p.eigenvalues, p.newton_iterations, p.special))
+    points += forward.points[1:]
+    special = [SpecialPoint(sp.kind, n_back - 1 - sp.index, sp.u, sp.eigenvalues, sp.value, sp.data)
+               for sp in reversed(backward.special_points)]
+    special += [SpecialPoint(sp.kind, n_back - 1 + sp.index, sp.u, sp.eigenvalues, sp.value, sp.data)
+                for sp in forward.special_points]
+    _label(special)
+    status = "completed" if backward.status == forward.status == "completed" else "corrector_failed"
+    return Branch(points, special, status, f"one end: {backward.message}; other end: {forward.message}", options)

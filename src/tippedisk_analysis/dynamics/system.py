@@ -1,0 +1,281 @@
+"""The one declaration of a dynamical system x' = f(x; p) that every analysis of :mod:`.dynamics` takes.
+
+A :class:`System` holds heyoka expressions: variables, right-hand sides, named runtime parameters (the
+i-th parameter is ``hy.par[i]``), and optionally state names and scales, observables, first integrals,
+terminal events and the number of trivial Floquet multipliers. It checks the declaration once (one
+line naming any clash) and builds on demand, caching per instance, what the analyses need: the compiled
+right-hand side and observables, derivative tensors of orders 1-3 (:mod:`.tensors`), and scalar, batch
+and variational Taylor integrators. heyoka keeps the machine code in its disk cache as well, so a second
+process starts fast; a second analysis of the same ``System`` in one process compiles nothing.
+
+Integrators are templates: an analysis copies one (``copy.copy``) before it changes its state.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import threading
+from dataclasses import dataclass
+
+import heyoka as hy
+import numpy as np
+
+from ..compilation import compiling
+from ..errors import ParameterError
+from .tensors import Field
+
+RESERVED = frozenset({
+    "point", "eig", "eig_real", "eig_imag", "stability", "n_unstable", "max_real_eig", "arclength", "residual",
+    "newton_iterations", "special_point", "special_kind", "special_label", "special_index", "special_value",
+    "special_frequency", "special_l1", "special_a", "critical_product", "period", "floquet", "sample", "state",
+    "orbit", "orbit_status", "amplitude", "multiplier_real", "multiplier_imag", "trivial", "time", "exponent",
+    "exponents", "history", "history_time", "divergence_mean", "attractor", "outcome", "label", "crossing",
+    "parameter", "value", "sample_time", "t", "tol"})
+"""Names the generic datasets use for their own dimensions and variables: no state, parameter or
+observable may take one (a dataset could not hold both)."""
+
+DIRECTIONS = {"negative": hy.event_direction.negative, "positive": hy.event_direction.positive,
+              "any": hy.event_direction.any}
+
+
+@dataclass(frozen=True)
+class Event:
+    """A terminal event: the run ends where ``expression`` crosses zero in ``direction``; ``name`` becomes the
+    run's status (e.g. ``fell``)."""
+
+    name: str
+    expression: object
+    direction: str = "negative"
+
+    def __post_init__(self):
+        if self.direction not in DIRECTIONS:
+            raise ParameterError(f"event {self.name!r}: direction {self.direction!r}; give one of "
+                                 f"{', '.join(DIRECTIONS)}")
+
+
+def parameter_indices(expressions) -> set[int]:
+    """The indices i of the hy.par[i] that ``expressions`` use."""
+    return {int(str(p)[1:]) for p in hy.get_params(list(expressions))}
+
+
+class System:
+    """x' = f(x; p): heyoka ``variables`` and right-hand sides ``rhs``; ``parameters`` {name: default value}
+    in the order of hy.par[0], hy.par[1], ...
+
+    Optional: ``state_names`` (default the variables' names); ``state_scale`` (typical magnitudes: the metric
+    of Newton steps and continuation, default 1); ``observables`` {name: expression or (expression, units)}:
+    quantities of the state (stored along orbits, pinned by equilibrium problems); ``integrals`` {name:
+    expression}: first integrals (their levels are pinned where orbits come in families); ``events``
+    (:class:`Event`, terminal); ``n_trivial``: trivial Floquet multipliers (1 + independent integrals or
+    families); ``units`` {state name: units}; ``compact_mode``: heyoka's compact mode for large systems.
+    """
+
+    def __init__(self, name: str, variables, rhs, parameters: dict | None = None, *, state_names=None,
+                 state_scale=None, observables: dict | None = None, integrals: dict | None = None, events=(),
+                 n_trivial: int = 1, units: dict | None = None, compact_mode: bool = False, description: str = ""):
+        if not isinstance(name, str) or not name:
+            raise ParameterError("a System needs a name (a non-empty string), e.g. System('ab', ...)")
+        self.name = name
+        self.variables = tuple(variables)
+        self.rhs = tuple(hy.expression(f) if isinstance(f, int | float) else f for f in rhs)
+        if len(self.rhs) != len(self.variables) or not self.variables:
+            raise ParameterError(f"system {name!r}: {len(self.variables)} variables but {len(self.rhs)} right-hand "
+                                 "sides; give one right-hand side per variable")
+        self.state_names = tuple(str(v) for v in self.variables) if state_names is None else tuple(state_names)
+        if len(self.state_names) != self.n:
+            raise ParameterError(f"system {name!r}: {len(self.state_names)} state names for {self.n} variables")
+        self.parameters = dict(parameters or {})
+        self.parameter_names = tuple(self.parameters)
+        self.pars = np.array([float(v) for v in self.parameters.values()], dtype=float)
+        self.state_scale = np.ones(self.n) if state_scale is None else np.array(state_scale, dtype=float)
+        if self.state_scale.shape != (self.n,) or not np.all(self.state_scale > 0):
+            raise ParameterError(f"system {name!r}: state_scale needs {self.n} positive numbers")
+        self.observables = {k: (v if isinstance(v, tuple) else (v, "")) for k, v in (observables or {}).items()}
+        self.integrals = dict(integrals or {})
+        self.events = tuple(events)
+        self.n_trivial = int(n_trivial)
+        self.units = dict(units or {})
+        self.compact_mode = bool(compact_mode)
+        self.description = description
+        self._check_names()
+        self._check_parameters()
+        self._cache: dict = {}
+        self._lock = threading.RLock()
+
+    # -- declaration checks
+    def _check_names(self) -> None:
+        groups = {"state": self.state_names, "parameter": self.parameter_names,
+                  "observable": tuple(self.observables), "integral": tuple(self.integrals)}
+        seen: dict[str, str] = {}
+        for kind, names in groups.items():
+            for n in names:
+                if not isinstance(n, str) or not n.isidentifier():
+                    raise ParameterError(f"system {self.name!r}: {kind} name {n!r} is not an identifier; give names "
+                                         "such as u1 or beta")
+                if n in RESERVED:
+                    raise ParameterError(f"system {self.name!r}: {kind} name {n!r} is reserved by the datasets "
+                                         f"(they hold a {n!r} of their own); rename it")
+                if n in seen:
+                    raise ParameterError(f"system {self.name!r}: the name {n!r} is both a {seen[n]} and a {kind}; "
+                                         "give distinct names")
+                seen[n] = kind
+
+    def _check_parameters(self) -> None:
+        used_rhs = parameter_indices(self.rhs)
+        used = used_rhs | parameter_indices([e for e, _u in self.observables.values()]) | \
+            parameter_indices(list(self.integrals.values())) | parameter_indices([e.expression for e in self.events])
+        n = len(self.parameter_names)
+        beyond = sorted(i for i in used if i >= n)
+        if beyond:
+            raise ParameterError(f"system {self.name!r}: the expressions use hy.par[{beyond[0]}] but only {n} "
+                                 f"parameter(s) are declared ({', '.join(self.parameter_names) or 'none'}); declare "
+                                 "one name per hy.par index, in index order")
+        unused = [i for i in range(n) if i not in used]
+        if unused:
+            raise ParameterError(f"system {self.name!r}: parameter {self.parameter_names[unused[0]]!r} "
+                                 f"(hy.par[{unused[0]}]) appears in no expression; drop it or use it")
+
+    # -- names and parameter vectors
+    @property
+    def n(self) -> int:
+        return len(self.variables)
+
+    @property
+    def key(self) -> str:
+        """A fingerprint of the equations (datasets store it; a stored branch is continued with the same System)."""
+        text = "|".join([self.name, *map(str, self.rhs), *self.parameter_names])
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+    def parameter_index(self, name: str) -> int:
+        if name not in self.parameter_names:
+            raise ParameterError(f"{self.name} has no parameter {name!r}; choose one of "
+                                 f"{', '.join(self.parameter_names) or '(none)'}")
+        return self.parameter_names.index(name)
+
+    def state_index(self, name: str) -> int:
+        if name not in self.state_names:
+            raise ParameterError(f"{self.name} has no state {name!r}; choose one of {', '.join(self.state_names)}")
+        return self.state_names.index(name)
+
+    def with_pars(self, pars=None, **values) -> np.ndarray:
+        """The runtime parameter vector (default values, or ``pars``) with some values replaced by name."""
+        out = self.pars.copy() if pars is None else np.array(pars, dtype=float).copy()
+        if out.shape != self.pars.shape:
+            raise ParameterError(f"{self.name} has {len(self.pars)} parameters ({', '.join(self.parameter_names)}), "
+                                 f"not {out.size}")
+        for name, value in values.items():
+            out[self.parameter_index(name)] = float(value)
+        return out
+
+    def equations(self) -> list[str]:
+        """The right-hand sides as text, e.g. "u1' = ..." (for the datasets' attributes: to read, not to eval)."""
+        return [f"{n}' = {f}" for n, f in zip(self.state_names, self.rhs)]
+
+    def attrs(self, pars=None) -> dict:
+        """The attributes generic datasets carry: name, fingerprint, names, equations, parameter values."""
+        pars = self.pars if pars is None else np.asarray(pars, dtype=float)
+        return {"system": self.name, "system_key": self.key, "state_names": " ".join(self.state_names),
+                "parameter_names": " ".join(self.parameter_names),
+                "system_equations": "; ".join(self.equations()),
+                "system_parameters": "; ".join(f"{k} = {float(v)!r}" for k, v in zip(self.parameter_names, pars))}
+
+    # -- compiled code (built on demand, cached per instance)
+    def _cached(self, key, what: str, build):
+        with self._lock:
+            if key not in self._cache:
+                with compiling(f"{what} of {self.name}"):
+                    self._cache[key] = build()
+            return self._cache[key]
+
+    def compiled_count(self) -> int:
+        """How many compiled objects this System holds (a second analysis should add none it already built)."""
+        return len(self._cache)
+
+    def field(self, pins=(), parameters=()) -> Field:
+        """The right-hand side followed by the observables named in ``pins``, with exact derivative tensors with
+        respect to the states and the runtime parameters ``parameters`` (names or indices, in that order)."""
+        pins = tuple(pins)
+        for p in pins:
+            if p not in self.observables:
+                raise ParameterError(f"{self.name} has no observable {p!r} to pin; it has "
+                                     f"{', '.join(self.observables) or 'none'}")
+        indices = tuple(i if isinstance(i, int) else self.parameter_index(i) for i in parameters)
+        outputs = [*self.rhs, *(self.observables[p][0] for p in pins)]
+        return self._cached(("field", pins, indices), "the derivative tensors",
+                            lambda: Field(outputs, self.variables, [hy.par[i] for i in indices]))
+
+    def rhs_function(self):
+        """cfunc of the right-hand side over the states."""
+        return self._cached(("rhs",), "the right-hand side", lambda: hy.cfunc(list(self.rhs), list(self.variables)))
+
+    def observables_function(self):
+        """cfunc of the observables (in declaration order) over the states, or None without observables."""
+        if not self.observables:
+            return None
+        exprs = [e for e, _u in self.observables.values()]
+        return self._cached(("observables",), "the observables", lambda: hy.cfunc(exprs, list(self.variables)))
+
+    def evaluate(self, function, states, pars) -> np.ndarray:
+        """A cfunc of this system at states (n,) or (n, N) with pars (p,) or (p, N): (outputs,) or (outputs, N)."""
+        x = np.asarray(states, dtype=float)
+        X = np.ascontiguousarray(x.reshape(self.n, -1))
+        if function.nparams == 0:
+            out = function(X)
+        else:
+            P = np.asarray(pars, dtype=float)
+            P = np.repeat(P[:, None], X.shape[1], axis=1) if P.ndim == 1 else P
+            out = function(X, pars=np.ascontiguousarray(P[: function.nparams]))
+        return out[:, 0] if x.ndim == 1 else out
+
+    def f(self, states, pars=None) -> np.ndarray:
+        """The right-hand side at states (n,) or (n, N)."""
+        return self.evaluate(self.rhs_function(), states, self.pars if pars is None else pars)
+
+    def observe(self, states, pars=None) -> dict[str, np.ndarray]:
+        """The observables at states (n,) or (n, N), by name."""
+        cf = self.observables_function()
+        if cf is None:
+            return {}
+        return dict(zip(self.observables, self.evaluate(cf, states, self.pars if pars is None else pars)))
+
+    def taylor(self, tol: float, *, batch: int = 0, tangents: int = 0, parameters=(), events: bool = False,
+               extra=()):
+        """A Taylor integrator template (copy it before use).
+
+        batch: SIMD lanes (0: scalar); tangents: k first-order variations with respect to the first k initial
+        states (Lyapunov vectors; ``parameters`` adds variations with respect to those runtime parameters,
+        names or indices, after ``tangents`` = n for shooting); events: the System's terminal events;
+        extra: (variable, rhs) pairs appended to the system (quadratures such as a divergence integral).
+        The state holds x, then the variations (heyoka's var_ode_sys layout), then ``extra``; the integrator's
+        ``pars`` hold the first ``len(ta.pars)`` runtime parameters (those up to the last one its equations use).
+        """
+        indices = tuple(i if isinstance(i, int) else self.parameter_index(i) for i in parameters)
+        extra = tuple(extra)
+        key = ("taylor", float(tol), int(batch), int(tangents), indices, bool(events), tuple(map(str, extra)))
+
+        def build():
+            sys = list(zip(self.variables, self.rhs))
+            if tangents or indices:
+                args = [*self.variables[:tangents], *(hy.par[i] for i in indices)]
+                sys = hy.var_ode_sys(sys, args, order=1)
+            sys = list(sys) + list(extra)
+            size = len(sys)
+            t_events = [e for e in self.events] if events else []
+            used = parameter_indices([f for _v, f in sys] + [e.expression for e in t_events])
+            n_par = max(used) + 1 if used else 0  # heyoka wants exactly the parameters the equations use
+            kwargs = {"tol": float(tol), "compact_mode": self.compact_mode}
+            if batch:
+                if t_events:
+                    kwargs["t_events"] = [hy.t_event_batch(e.expression, direction=DIRECTIONS[e.direction])
+                                          for e in t_events]
+                return hy.taylor_adaptive_batch(sys, np.zeros((size, batch)), pars=np.zeros((n_par, batch)), **kwargs)
+            if t_events:
+                kwargs["t_events"] = [hy.t_event(e.expression, direction=DIRECTIONS[e.direction]) for e in t_events]
+            return hy.taylor_adaptive(sys, np.zeros(size), pars=np.zeros(n_par), **kwargs)
+
+        what = "the " + ("batch " if batch else "") + ("variational " if tangents or indices else "") + "integrator"
+        return self._cached(key, what, build)
+
+    def __repr__(self) -> str:
+        return (f"System({self.name!r}: {self.n} states {', '.join(self.state_names)}; parameters "
+                f"{', '.join(self.parameter_names) or 'none'})")

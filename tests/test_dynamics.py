@@ -1,0 +1,137 @@
+"""The generic dynamics layer (tippedisk_analysis.dynamics): one System declaration, checked, and the
+analyses on it, proven on AUTO-07p's demo 'ab' (B = 14, beta = 2) against exact algebra."""
+
+from __future__ import annotations
+
+import math
+import re
+
+import heyoka as hy
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+import tippedisk_analysis as td
+from tippedisk_analysis import dynamics as dy
+
+B, BETA = 14.0, 2.0
+
+
+def ab_system(name: str = "ab") -> dy.System:
+    u1, u2 = hy.make_vars("u1", "u2")
+    D, Bp, beta = hy.par[0], hy.par[1], hy.par[2]
+    return dy.System(name, [u1, u2], [-u1 + D * (1 - u1) * hy.exp(u2),
+                                      -u2 + D * Bp * (1 - u1) * hy.exp(u2) - beta * u2],
+                     parameters={"D": 0.0, "B": B, "beta": BETA})
+
+
+# ---------------------------------------------------------------- exact algebra of 'ab'
+# equilibria: u2 = B u1 / (1 + beta), D = u1 exp(-u2) / (1 - u1); folds where dD/du1 = 0; Hopf points where
+# the trace of the Jacobian vanishes with a positive determinant (a negative one: a neutral saddle)
+
+
+def _D(u1, beta=BETA):
+    return u1 * math.exp(-B * u1 / (1 + beta)) / (1 - u1)
+
+
+def _jacobian(u1, beta=BETA):
+    D, E = _D(u1, beta), math.exp(B * u1 / (1 + beta))
+    return np.array([[-1 - D * E, D * (1 - u1) * E], [-D * B * E, -1 + D * B * (1 - u1) * E - beta]])
+
+
+def _exact_points(beta=BETA):
+    k = B / (1 + beta)
+    folds = [brentq(lambda u: 1 / u - k + 1 / (1 - u), a, b) for a, b in ((0.05, 0.5), (0.5, 0.95))]
+    grid = np.linspace(0.01, 0.99, 999)
+    tr = [np.trace(_jacobian(u, beta)) for u in grid]
+    zeros = [brentq(lambda u: np.trace(_jacobian(u, beta)), grid[i], grid[i + 1])
+             for i in range(len(grid) - 1) if tr[i] * tr[i + 1] < 0]
+    hopf = [u for u in zeros if np.linalg.det(_jacobian(u, beta)) > 0]
+    saddles = [u for u in zeros if np.linalg.det(_jacobian(u, beta)) < 0]
+    return folds, hopf, saddles
+
+
+@pytest.fixture(scope="module")
+def ab():
+    return ab_system()
+
+
+@pytest.fixture(scope="module")
+def ab_branch(ab):
+    return dy.equilibrium_branch(ab, [0.0, 0.0], "D", bounds=(0.0, 0.2))
+
+
+def test_ab_branch_has_its_two_folds_and_one_hopf_point_and_no_neutral_saddle(ab_branch):
+    folds, hopf, saddles = _exact_points()
+    assert len(folds) == 2 and len(hopf) == 1 and len(saddles) == 1  # the algebra: one neutral saddle too
+    ds = ab_branch
+    assert ds.attrs["labels"] == "LP1 LP2 HOPF1" and ds.attrs["status"] == "completed"
+    points = {str(label): int(i) for label, i in zip(ds.special_label.values, ds.special_index.values)}
+    for label, u1 in (("LP1", folds[0]), ("LP2", folds[1]), ("HOPF1", hopf[0])):
+        i = points[label]
+        assert float(ds.u1[i]) == pytest.approx(u1, abs=1e-10), label
+        assert float(ds.D[i]) == pytest.approx(_D(u1), abs=1e-10), label
+        assert float(ds.u2[i]) == pytest.approx(B * u1 / (1 + BETA), abs=1e-10), label
+    omega = math.sqrt(np.linalg.det(_jacobian(hopf[0])))
+    k = list(ds.special_label.values).index("HOPF1")
+    assert float(ds.special_frequency[k]) == pytest.approx(omega, rel=1e-10)
+    assert 2 * math.pi / omega == pytest.approx(1.56775, abs=1e-5)  # AUTO-07p's period at the Hopf point
+    # the neutral saddle (D = 0.10571, just past LP1) is no special point: no point of the branch sits there
+    assert not any(abs(float(ds.D[i]) - _D(saddles[0])) < 1e-6 for i in ds.special_index.values)
+    np.testing.assert_array_equal(ds.B.values, B)  # fixed parameters are stored along the branch
+    assert float(ds.residual.max()) < 1e-12
+
+
+def test_the_hopf_curve_keeps_the_trace_zero(ab, ab_branch):
+    curve = dy.special_point_curve(ab, ab_branch, "HOPF1", ("D", "beta"), bounds={"beta": (1.0, 3.0)})
+    assert curve.attrs["critical"] == "hopf" and curve.sizes["point"] > 10
+    beta = curve.beta.values
+    assert beta.min() == pytest.approx(1.0) and beta.max() == pytest.approx(3.0)
+    for i in range(0, curve.sizes["point"], 7):  # on every point: an equilibrium with a zero trace
+        u1, b = float(curve.u1[i]), float(curve.beta[i])
+        assert float(curve.D[i]) == pytest.approx(_D(u1, b), rel=1e-9)
+        assert np.trace(_jacobian(u1, b)) == pytest.approx(0.0, abs=1e-8)
+        assert np.linalg.det(_jacobian(u1, b)) > 0
+
+
+def test_a_stored_branch_is_continued_with_the_same_system_only(ab, ab_branch, tmp_path):
+    td.save(ab_branch, tmp_path / "ab.nc")
+    stored = td.load(tmp_path / "ab.nc")
+    assert stored.attrs["system"] == "ab" and "u1' = " in stored.attrs["system_equations"]
+    state, pars = dy.point_of(stored, ab, int(stored.special_index.values[2]))
+    assert pars[0] == pytest.approx(float(ab_branch.D[int(ab_branch.special_index[2])]))
+    other = dy.System("ab2", ab.variables, ab.rhs, ab.parameters)
+    with pytest.raises(td.DatasetError, match="pass the System the dataset was computed with"):
+        dy.point_of(stored, other, 0)
+    from tippedisk_analysis.plotting import plot_dataset
+
+    plot_dataset(stored, tmp_path / "ab.png")  # generic datasets take the generic figure
+    assert (tmp_path / "ab.png").stat().st_size > 10_000
+
+
+def test_a_second_analysis_of_the_same_system_compiles_nothing():
+    system = ab_system("ab_reuse")
+    dy.equilibrium_branch(system, [0.0, 0.0], "D", bounds=(0.0, 0.2))
+    compiled = system.compiled_count()
+    field = system.field((), ("D",))
+    dy.equilibrium_branch(system, [0.0, 0.0], "D", bounds=(0.0, 0.15))
+    assert system.compiled_count() == compiled and system.field((), ("D",)) is field
+
+
+@pytest.mark.parametrize("make, fragment", [
+    (lambda x, y: dy.System("s", [x, y], [hy.par[1] * x, y], {"a": 1.0}),
+     "use hy.par[1] but only 1 parameter(s) are declared"),
+    (lambda x, y: dy.System("s", [x, y], [hy.par[0] * x, y], {"a": 1.0, "b": 2.0}),
+     "parameter 'b' (hy.par[1]) appears in no expression"),
+    (lambda x, y: dy.System("s", [x, y], [x, y], {}, state_names=("point", "y")), "state name 'point' is reserved"),
+    (lambda x, y: dy.System("s", [x, y], [hy.par[0] * x, y], {"x": 1.0}), "the name 'x' is both a state and a "
+                                                                           "parameter"),
+    (lambda x, y: dy.System("s", [x, y], [x], {}), "2 variables but 1 right-hand sides"),
+    (lambda x, y: dy.System("s", [x, y], [x, y], {}, observables={"period": x}),
+     "observable name 'period' is reserved"),
+])
+def test_a_bad_declaration_is_one_line_naming_the_clash(make, fragment):
+    x, y = hy.make_vars("x", "y")
+    with pytest.raises(td.ParameterError, match=re.escape(fragment)) as info:
+        make(x, y)
+    assert "\n" not in str(info.value)
