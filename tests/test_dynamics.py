@@ -135,3 +135,60 @@ def test_a_bad_declaration_is_one_line_naming_the_clash(make, fragment):
     with pytest.raises(td.ParameterError, match=re.escape(fragment)) as info:
         make(x, y)
     assert "\n" not in str(info.value)
+
+
+# ---------------------------------------------------------------- periodic orbits from the Hopf point
+AUTO_PERIODS = {0.125: 1.8641832388, 0.12: 2.6727661404, 0.1168: 5.7046181435}
+"""AUTO-07p (bifpy 0.3.0, NTST = 100-200, EPSS = 1e-10) on 'ab' with B = 14, beta = 2: the periods at user
+points; the branch ends in a homoclinic orbit at D -> 0.10550707004 (an independent scipy integration of the
+orbits and of the saddle's manifolds gives the same digits)."""
+
+
+@pytest.fixture(scope="module")
+def ab_orbits(ab, ab_branch):
+    return dy.orbit_branch(ab, ab_branch, "HOPF1", bounds=(0.0, 0.2), period_max=50.0, marks=tuple(AUTO_PERIODS))
+
+
+def test_ab_orbits_from_the_hopf_point_have_auto07p_periods_and_end_in_a_homoclinic_orbit(ab_orbits):
+    ds = ab_orbits
+    assert ds.attrs["kind"] == "periodic_orbits" and ds.attrs["system"] == "ab"
+    assert ds.attrs["labels"] == "UZ1 UZ2 UZ3 HC1"
+    first = 0
+    assert float(ds.period[first]) == pytest.approx(2 * math.pi / math.sqrt(np.linalg.det(_jacobian(
+        _exact_points()[1][0]))), rel=1e-3)  # it starts at the Hopf point's period
+    specials = {str(label): int(i) for label, i in zip(ds.special_label.values, ds.special_index.values)}
+    for (value, period), label in zip(AUTO_PERIODS.items(), ("UZ1", "UZ2", "UZ3")):
+        i = specials[label]
+        assert float(ds.D[i]) == value and float(ds.period[i]) == pytest.approx(period, abs=1e-6), label
+    i = specials["HC1"]
+    k = list(ds.special_label.values).index("HC1")
+    assert float(ds.period[i]) == pytest.approx(50.0) and float(ds.special_limit[k]) == pytest.approx(0.10550707004,
+                                                                                                     abs=1e-8)
+    assert "approach to a homoclinic orbit at D ~ 0.10550707" in ds.attrs["message"]
+    assert np.all(ds.stability.values == 0)  # every orbit is stable, as AUTO-07p finds
+    assert np.all(np.diff(ds.period.values) > 0)  # the period grows monotonically towards the homoclinic orbit
+
+
+def test_one_system_through_equilibria_orbits_and_lyapunov_exponents(ab, ab_orbits):
+    """The stable orbit at D = 0.12: its largest Lyapunov exponent is 0 (the flow direction) and the other one
+    is its Floquet exponent log|mu_2| / T (a measured growth rate against the monodromy)."""
+    i = int(ab_orbits.special_index.values[list(ab_orbits.special_label.values).index("UZ2")])
+    T = float(ab_orbits.period[i])
+    mu = ab_orbits.multiplier_real.values[i] + 1j * ab_orbits.multiplier_imag.values[i]
+    nontrivial = mu[ab_orbits.multiplier_trivial.values[i] == 0]
+    floquet_exponent = math.log(abs(nontrivial[0])) / T
+    x0 = ab_orbits.initial_state.values[i]
+    ly = dy.lyapunov_spectrum(ab, x0, ab.with_pars(D=0.12), t_end=400 * T, dt=T / 4)
+    assert abs(float(ly.exponents[0])) < 2e-3
+    assert float(ly.exponents[1]) == pytest.approx(floquet_exponent, rel=2e-3)
+    assert float(ly.exponents.sum()) == pytest.approx(float(ly.divergence_mean), rel=1e-3)
+
+
+def test_roessler_lyapunov_spectrum_against_the_published_values():
+    """a = b = 0.2, c = 5.7: 0.0714, 0, -5.3943 (J. C. Sprott, Chaos and Time-Series Analysis, Oxford 2003, the
+    exponents of common chaotic flows); their sum, -5.3229, is the mean divergence a - c + <x> (<x> = 0.1773 from
+    a separate 20,000-s scipy run)."""
+    roessler = dy.textbook_system("roessler").with_defaults(c=5.7)
+    ds = dy.lyapunov_spectrum(roessler, [1.0, 1.0, 1.0], t_end=10000.0, dt=1.0, transient=100.0)
+    np.testing.assert_allclose(ds.exponents.values, [0.0714, 0.0, -5.3943], atol=2e-3)
+    assert float(ds.exponents.sum()) == pytest.approx(float(ds.divergence_mean), rel=1e-3)  # Liouville

@@ -3,7 +3,7 @@
 
 from ..dynamics.continuation import *  # noqa: F401,F403
 from ..dynamics.continuation import (LABELS, REJECTED, Branch, Options, Point, Problem, SpecialPoint,  # noqa: F401
-                                     _eigenvalues, _hopf_test, _label, _nearest_pair, _nearest_real, _tangent,
-                                     _zero_test,
+                                     _eigenvalues, _tangent, hopf_test, label_points, nearest_pair, nearest_real,
+                                     zero_test,
                                      continue_both_ways, continue_branch, correct, solve_at)
 from ..dynamics.switching import Switch, branch_directions, switch_branch  # noqa: F401

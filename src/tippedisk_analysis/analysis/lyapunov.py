@@ -1,28 +1,11 @@
-"""Lyapunov exponents by variational equations and periodic QR re-orthonormalisation.
+"""Lyapunov exponents of the tippedisk: the reduced system (:func:`.reduced.system`, with its terminal events
+``fell`` (the tilt reaches the fall angle, the Euler-angle singularity) and ``lift_off`` (lambda_N < 0: outside
+the bilateral model)) through the generic spectra of :mod:`tippedisk_analysis.dynamics.lyapunov`.
 
-Generic (any :class:`.periodic.OdeSystem`). The state and k tangent vectors are integrated together by one
-heyoka Taylor integrator of the first-order variational equations (``hy.var_ode_sys`` with the first k
-states as arguments: its k columns start from the orthonormal vectors we set, and the equations are linear).
-The tangent vectors start as a fixed generic orthonormal frame (:func:`initial_frame`). Every ``dt`` the
-tangent matrix W is factored W = Q R (signs so that diag R > 0), log R_ii is accumulated and
-W is replaced by Q (Benettin, Galgani, Giorgilli & Strelcyn 1980; Shimada & Nagashima 1979; as
-DynamicalSystems.jl's ``lyapunovspectrum``). After a ``transient`` (re-orthonormalised, not accumulated):
-
-    lambda_i(t) = (1 / (t - t0)) sum log R_ii,
-
-stored at every re-orthonormalisation (the convergence history). With k = n the sum of the exponents equals
-(1/(t - t0)) log |det phi| = the time average of the divergence of f (Liouville), which :func:`spectrum`
-checks by integrating tr(df/dx) along the same trajectory.
-
-Terminal events (``events``: (status, expression) pairs, stop where the expression falls through 0) end a run
-with that status; the exponents are then those up to the event and the result says so.
-
-The tippedisk: the reduced system (:mod:`.reduced`) with the events ``fell`` (the tilt reaches the fall
-angle, the Euler-angle singularity) and ``lift_off`` (lambda_N < 0: outside the bilateral model). At a stable
-spinning equilibrium the spectrum is the real parts of all 7 eigenvalues of the reduced Jacobian, including
-the structural 0 of the spin family: the largest exponent there is 0. :func:`lyapunov_map` computes the
-largest exponent over (Omega, eps) from the Table 3 start on the sweep machinery (:mod:`.sweeps`); runs that
-fall or lift off are flagged (``outcome``), not averaged into the map.
+At a stable spinning equilibrium the spectrum is the real parts of all 7 eigenvalues of the reduced Jacobian,
+including the structural 0 of the spin family: the largest exponent there is 0. :func:`lyapunov_map` computes
+the largest exponent over (Omega, eps) from the Table 3 start on the sweep machinery (:mod:`.sweeps`); runs
+that fall or lift off are flagged (``outcome``), not averaged into the map.
 """
 
 from __future__ import annotations
@@ -36,194 +19,14 @@ import numpy as np
 import xarray as xr
 
 from ..defaults import BATCH_SIZE, FALL_ANGLE, MAP_TOL, SLIP_SMOOTHING
+from ..dynamics.lyapunov import DT, TOL, LyapunovResult, initial_frame, spectrum, spectrum_dataset  # noqa: F401
+from ..dynamics.systems import textbook_system
 from ..errors import ParameterError
 from ..results import make_attrs
 from . import sweeps
-from .periodic import OdeSystem, _cached, _n_params, textbook_system, tippedisk_system
+from .orbits import tippedisk_system
 
-TOL = 1e-12
-DT = 0.1  # re-orthonormalisation interval (s for the tippedisk)
 OUTCOMES = {"completed": 0, "fell": 1, "lift_off": 2, "failed": 3}
-
-
-def initial_frame(n: int, k: int) -> np.ndarray:
-    """A fixed generic orthonormal frame (n, k): no tangent vector may start without a component along a
-    direction of the spectrum (the identity frame would: at a spinning equilibrium e_beta has none along the
-    spin family's e_omega_x, and the first exponent would converge to 0 only once round-off has grown)."""
-    rng = np.random.default_rng(20200)
-    return np.linalg.qr(rng.normal(size=(n, n)))[0][:, :k]
-
-
-@dataclasses.dataclass
-class LyapunovResult:
-    exponents: np.ndarray  # (k,), descending [1/time]
-    history_time: np.ndarray  # (H,) time since the end of the transient
-    history: np.ndarray  # (H, k) running estimates
-    status: str  # completed, or the event that ended the run, or failed
-    message: str
-    t_final: float  # time the run ended (from 0, transient included)
-    divergence_mean: float  # time average of tr(df/dx) over the accumulation window (nan if not computed)
-    final_state: np.ndarray
-
-
-def _compiled(system: OdeSystem, k: int, tol: float, events: tuple, batch: int = 0):
-    """Variational integrator with k tangent vectors (batch lanes if batch > 0) and the terminal events."""
-
-    def build():
-        import heyoka as hy
-
-        sys = list(zip(system.variables, system.rhs))
-        vsys = hy.var_ode_sys(sys, list(system.variables[:k]), order=1)
-        n_par = max(_n_params(list(system.rhs) + [e for _s, e in events]), 1)
-        x = np.zeros(system.n)
-        neg = hy.event_direction.negative
-        if batch:
-            t_events = [hy.t_event_batch(e, direction=neg) for _s, e in events]
-            ta = hy.taylor_adaptive_batch(vsys, np.zeros((system.n * (k + 1), batch)), pars=np.zeros((n_par, batch)),
-                                          tol=tol, t_events=t_events, compact_mode=system.compact_mode and k > 1)
-        else:
-            t_events = [hy.t_event(e, direction=neg) for _s, e in events]
-            ta = hy.taylor_adaptive(vsys, x, pars=np.zeros(n_par), tol=tol, t_events=t_events,
-                                    compact_mode=system.compact_mode)
-        return ta, n_par
-
-    return _cached((system.name, "lyapunov", k, float(tol), tuple(s for s, _e in events), batch), build)
-
-
-def _divergence_integrator(system: OdeSystem, tol: float):
-    def build():
-        import heyoka as hy
-
-        d = hy.make_vars("divergence_integral")
-        div = sum(hy.diff(f, v) for f, v in zip(system.rhs, system.variables))
-        sys = [*zip(system.variables, system.rhs), (d, div)]
-        n_par = max(_n_params(list(system.rhs)), 1)
-        return hy.taylor_adaptive(sys, np.zeros(system.n + 1), pars=np.zeros(n_par), tol=tol,
-                                  compact_mode=system.compact_mode), n_par
-
-    return _cached((system.name, "divergence", float(tol)), build)
-
-
-def spectrum(system: OdeSystem, state, pars=None, *, n_exponents: int | None = None, t_end: float = 100.0,
-             dt: float = DT, transient: float = 0.0, tol: float = TOL, events: tuple = (),
-             divergence: bool = True) -> LyapunovResult:
-    """The k = ``n_exponents`` (default all) largest Lyapunov exponents along the run from ``state``."""
-    import heyoka as hy
-
-    n = system.n
-    k = n if n_exponents is None else int(n_exponents)
-    if not 1 <= k <= n:
-        raise ParameterError(f"n_exponents = {n_exponents!r}; give 1 .. {n}")
-    for name, value in (("t_end", t_end), ("dt", dt)):
-        if not (math.isfinite(value) and value > 0):
-            raise ParameterError(f"{name} = {value!r} must be positive")
-    if not (math.isfinite(transient) and 0 <= transient < t_end):
-        raise ParameterError(f"transient = {transient!r} must lie in [0, t_end)")
-    x0 = np.asarray(state, dtype=float)
-    if x0.shape != (n,) or not np.all(np.isfinite(x0)):
-        raise ParameterError(f"the initial state must be {n} finite numbers ({', '.join(system.state_names)})")
-    template, n_par = _compiled(system, k, tol, tuple(events))
-    ta = copy.copy(template)
-    pars = np.array(system.pars if pars is None else pars, dtype=float)
-    ta.pars[:] = pars[:n_par]
-    ta.time = 0.0
-    ta.state[:n] = x0
-    ta.state[n:] = initial_frame(n, k).ravel()
-    if events:
-        ta.reset_cooldowns()
-    logs = np.zeros(k)
-    times, hist = [], []
-    status, message = "completed", f"reached t_end = {t_end:g}"
-    t0, x_start = (0.0, x0.copy()) if transient == 0 else (None, None)
-    grid = np.arange(dt, t_end + 0.5 * dt, dt)
-    grid[-1] = t_end
-    if transient > 0:
-        grid = np.unique(np.append(grid, transient))
-    for t_next in grid:
-        outcome = ta.propagate_until(float(t_next))[0]
-        W = np.array(ta.state[n:]).reshape(n, k)
-        if outcome != hy.taylor_outcome.time_limit or not np.all(np.isfinite(ta.state)):
-            code = int(outcome)
-            if -len(events) <= code <= -1:
-                status = events[-code - 1][0]
-                message = f"ended at t = {ta.time:.6g} ({status}): the exponents are those of the run up to there"
-            else:
-                status, message = "failed", f"the integration stopped ({outcome!r}) at t = {ta.time:.6g}"
-            if status == "failed" or not np.all(np.isfinite(W)):
-                break
-        Q, R = np.linalg.qr(W)
-        d = np.sign(np.diag(R))
-        d[d == 0] = 1.0
-        Q, R = Q * d, (R.T * d).T
-        if t0 is not None:
-            logs += np.log(np.diag(R))
-            times.append(ta.time - t0)
-            hist.append(logs / (ta.time - t0))
-        elif ta.time >= transient - 1e-12 * max(1.0, transient):
-            t0, x_start = float(ta.time), np.array(ta.state[:n])
-        ta.state[n:] = Q.ravel()
-        if status != "completed":
-            break
-    if not hist:
-        raise ParameterError(f"the run ended at t = {ta.time:.6g} ({status}) before any exponent was accumulated; "
-                             "give a shorter transient or check the start")
-    exponents = hist[-1]
-    div_mean = math.nan
-    if divergence and t0 is not None and times and status != "failed":
-        dtemplate, dn = _divergence_integrator(system, tol)
-        tb = copy.copy(dtemplate)
-        tb.pars[:] = pars[:dn]
-        tb.time = t0
-        tb.state[:] = np.append(x_start, 0.0)
-        tb.propagate_until(t0 + times[-1])
-        div_mean = float(tb.state[-1] / times[-1])
-    return LyapunovResult(np.asarray(exponents), np.asarray(times), np.asarray(hist), status, message,
-                          float(ta.time), div_mean, np.array(ta.state[:n]))
-
-
-def spectrum_dataset(result: LyapunovResult, system: OdeSystem, config: dict, time_units: str = "s") -> xr.Dataset:
-    """A run's spectrum as a dataset of kind ``lyapunov`` (dims exponent, history)."""
-    import heyoka as hy
-
-    k = len(result.exponents)
-    rate = "s-1" if time_units == "s" else f"1/({time_units})"
-    data = {
-        "exponents": ("exponent", result.exponents, {"units": rate, "long_name": "Lyapunov exponents, descending"}),
-        "history": (("history", "exponent"), result.history,
-                    {"units": rate, "long_name": "running estimates at each re-orthonormalisation"}),
-        "history_time": ("history", result.history_time,
-                         {"units": time_units, "long_name": "time since the end of the transient"}),
-        "exponent_sum": ((), float(result.exponents.sum()), {"units": rate, "long_name": "sum of the exponents"}),
-        "final_state": ("state", result.final_state, {"long_name": "state at the end of the run"}),
-    }
-    if math.isfinite(result.divergence_mean):
-        data["divergence_mean"] = ((), result.divergence_mean, {
-            "units": rate, "long_name": "time average of div f = tr(df/dx) over the accumulation window (equals "
-                                         "the sum of the full spectrum)"})
-    coords = {"exponent": ("exponent", np.arange(k, dtype=np.int32), {"long_name": "exponent index"}),
-              "state": ("state", np.array(system.state_names, dtype=str), {"long_name": "state variable"})}
-    config = {"system": system.name, "heyoka_version": hy.__version__, **config}
-    message = (f"{result.message}; exponents " + ", ".join(f"{v:.6g}" for v in result.exponents) + f" {rate}"
-               + (f"; sum {result.exponents.sum():.6g}, mean divergence {result.divergence_mean:.6g}"
-                  if math.isfinite(result.divergence_mean) else ""))
-    attrs = make_attrs("lyapunov", config, result.status, message, mode="spectrum", system=system.name,
-                       t_final=result.t_final, max_exponent=float(result.exponents[0]))
-    return xr.Dataset(data, coords=coords, attrs=attrs)
-
-
-# ============================================================================ the tippedisk
-
-
-def tippedisk_events(fall_angle: float = FALL_ANGLE) -> tuple:
-    """(status, expression) terminal events of the reduced tippedisk: the fall and the lift-off."""
-    import heyoka as hy
-
-    from ..models import ode
-    from . import reduced
-
-    red = reduced.reduced_system()
-    beta = red.variables[0]
-    return (("fell", hy.sin(beta) - hy.sin(ode.P["fall_angle"])), ("lift_off", red.lambda_N))
 
 
 def tippedisk_start(setup, initial) -> np.ndarray:
@@ -250,8 +53,7 @@ def tippedisk_spectrum(setup=None, initial=None, *, state=None, t_end: float = 2
     system = tippedisk_system(setup)
     pars = ode.parameter_vector(setup, fall_angle, slip_smoothing)
     x0 = tippedisk_start(setup, initial) if state is None else np.asarray(state, dtype=float)
-    result = spectrum(system, x0, pars, n_exponents=n_exponents, t_end=t_end, dt=dt, transient=transient, tol=tol,
-                      events=tippedisk_events(fall_angle))
+    result = spectrum(system, x0, pars, n_exponents=n_exponents, t_end=t_end, dt=dt, transient=transient, tol=tol)
     config = {"setup": to_dict(setup), "initial": to_dict(initial) if state is None else None,
               "state": None if state is None else list(map(float, x0)), "t_end": t_end, "dt": dt,
               "transient": transient, "tol": tol, "fall_angle": fall_angle, "slip_smoothing": slip_smoothing,
@@ -344,8 +146,8 @@ class MapConfig:
 
 
 def _map_kernel(tol: float, batch_size: int):
-    setup_system = tippedisk_system()
-    return _compiled(setup_system, 1, tol, tippedisk_events(), batch=batch_size)
+    """The batch integrator of the reduced tippedisk with one tangent vector and the events fell, lift_off."""
+    return tippedisk_system().taylor(tol, tangents=1, batch=batch_size, events=True, compact_mode=False)
 
 
 def _prepare(config: MapConfig, start: int, stop: int):
@@ -377,8 +179,8 @@ def run_chunk(config: MapConfig | dict, start: int, stop: int) -> dict:
     Module-level and deterministic (dask runs it from the config alone)."""
     if isinstance(config, dict):
         config = MapConfig.from_dict(config)
-    template, n_par = _map_kernel(float(config.tol), int(config.batch_size))
-    ta = copy.copy(template)
+    ta = copy.copy(_map_kernel(float(config.tol), int(config.batch_size)))
+    n_par = ta.pars.shape[0]
     B = int(config.batch_size)
     x0, pars = _prepare(config, start, stop)
     n = stop - start

@@ -32,6 +32,7 @@ from ..models import ode
 from ..parameters import Setup, to_dict
 from ..results import config_of, make_attrs
 from ..dynamics import continuation
+from ..dynamics.datasets import SPECIAL_KINDS
 from ..dynamics.equilibria import EquilibriumProblem, Parameter
 from . import reduced, stability
 from . import stationary as st
@@ -44,8 +45,6 @@ PARAMETERS = {  # name: (units, long_name, scale of the arclength metric, defaul
     "inertia": ("1", "common scale of the inertia A, B, C about G (1: Table 2)", 1.0, (0.5, 2.0)),
 }
 STATE_SCALE = reduced.STATE_SCALE
-SPECIAL_KINDS = {"bound": 0, "fold": 1, "branch_point": 2, "hopf": 3, "bogdanov_takens": 4, "zero_hopf": 5,
-                 "double_hopf": 6, "bautin": 7, "cusp": 8, "line_saddle_change": 9, "line_focus_node": 10}
 CLASSES = {"": 0, "elliptic": 1, "hyperbolic": 2, "repelling_node": 3, "attracting_node": 4, "supercritical": 5,
            "subcritical": 6, "degenerate": 7}
 

@@ -44,10 +44,12 @@ def _pair(bounds, name: str) -> tuple[float, float]:
 
 
 def equilibrium_branch(system: System, state, parameter: str, *, bounds, pars=None, direction: int = 1,
-                       scale: float = 1.0, options: Options | None = None, **option_keywords) -> xr.Dataset:
+                       scale: float = 1.0, marks=(), options: Options | None = None,
+                       **option_keywords) -> xr.Dataset:
     """The branch of equilibria through ``state`` (corrected first) at ``pars`` (default: the system's
     values), continued in ``parameter`` within ``bounds`` = (low, high), starting towards increasing
-    (``direction`` = 1) or decreasing values; ``scale``: the parameter's typical size (arclength metric).
+    (``direction`` = 1) or decreasing values; ``scale``: the parameter's typical size (arclength metric);
+    ``marks``: parameter values where the branch's points are computed exactly (user points UZ1, ...).
     Options: :class:`.continuation.Options` or its fields as keywords (ds, ds_max, max_points, ...)."""
     pars = system.with_pars(pars)
     index = system.parameter_index(parameter)
@@ -58,7 +60,8 @@ def equilibrium_branch(system: System, state, parameter: str, *, bounds, pars=No
     if state.shape != (system.n,):
         raise ParameterError(f"the state needs {system.n} values ({', '.join(system.state_names)})")
     prob = EquilibriumProblem(system, [Parameter.of(system, parameter, scale)], pars=pars, bounds={0: (low, high)})
-    br = continue_branch(prob, np.append(state, pars[index]), _options(options, option_keywords), direction=direction)
+    br = continue_branch(prob, np.append(state, pars[index]), _options(options, option_keywords), direction=direction,
+                         marks=marks)
     return continuation_dataset(br, prob, {"start": list(map(float, state)), "parameter": parameter})
 
 

@@ -39,6 +39,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..errors import ParameterError
+from .detection import LABELS, hopf_test, label_points, nearest_pair, nearest_real, zero_test  # noqa: F401
 
 START_TOL = 1e-6  # a start point's residual, relative to the size of its terms (it is corrected first)
 EASY_ITERATIONS = 3  # the step grows after a correction in at most this many Newton iterations
@@ -119,8 +120,8 @@ class Problem:
 
     def tests(self, point: "Point") -> dict[str, float]:
         """Test functions whose sign changes mark special points (default: equilibrium branches)."""
-        return {"fold": point.tangent[self.parameters[0]], "branch_point": _zero_test(point.eigenvalues),
-                "hopf": _hopf_test(point.eigenvalues)}
+        return {"fold": point.tangent[self.parameters[0]], "branch_point": zero_test(point.eigenvalues),
+                "hopf": hopf_test(point.eigenvalues)}
 
     def located_value(self, kind: str, point: "Point") -> float:
         """A smooth function vanishing at the special point, in eigenvalue units where possible
@@ -128,9 +129,9 @@ class Problem:
         if kind == "fold":
             return point.tangent[self.parameters[0]]
         if kind == "branch_point":
-            return _nearest_real(point.eigenvalues)
+            return nearest_real(point.eigenvalues)
         if kind == "hopf":
-            return _nearest_pair(point.eigenvalues).real
+            return nearest_pair(point.eigenvalues).real
         return self.tests(point)[kind]
 
     def accept(self, kind: str, point: "Point", value: float, options: "Options") -> bool:
@@ -187,27 +188,6 @@ def _tangent(problem: Problem, u: np.ndarray, previous: np.ndarray | None) -> np
     if previous is not None and t @ previous < 0:
         t = -t
     return t
-
-
-def _zero_test(ev: np.ndarray) -> float:
-    """det = prod s_i (real): changes sign when a real eigenvalue crosses 0."""
-    return float(np.prod(ev).real)
-
-
-def _hopf_test(ev: np.ndarray) -> float:
-    """prod_{i<j} (s_i + s_j) (real): the determinant of the bialternate product."""
-    i, j = np.triu_indices(len(ev), 1)
-    return float(np.prod(ev[i] + ev[j]).real)
-
-
-def _nearest_real(ev: np.ndarray) -> float:
-    real = ev[np.abs(ev.imag) <= 1e-12 * max(1.0, np.abs(ev).max())].real
-    return float(real[np.argmin(np.abs(real))]) if real.size else math.nan
-
-
-def _nearest_pair(ev: np.ndarray) -> complex:
-    pairs = ev[ev.imag > 1e-12 * max(1.0, np.abs(ev).max())]
-    return complex(pairs[np.argmin(np.abs(pairs.real))]) if pairs.size else complex(math.nan)
 
 
 # ----------------------------------------------------------------------------- corrector
@@ -277,9 +257,11 @@ def _make_point(problem, u, previous_tangent, arclength, iterations, special="")
 
 def continue_branch(problem: Problem, u0: np.ndarray, options: Options = Options(), direction: int = 1,
                     tangent: np.ndarray | None = None, detect: bool = True,
-                    on_point: Callable[[Point], None] | None = None) -> Branch:
+                    on_point: Callable[[Point], None] | None = None, marks=()) -> Branch:
     """Continue the solution branch through u0 (corrected first) in ``direction`` (+1: the parameter
-    increases initially, -1: decreases; ignored if ``tangent`` is given)."""
+    increases initially, -1: decreases; ignored if ``tangent`` is given). ``marks``: values of the first free
+    parameter at which the branch's points are located exactly and reported as special points ``user`` (UZ1,
+    ..., AUTO's user points), every time the branch passes them."""
     u0 = np.asarray(u0, dtype=float)
     if not np.all(np.isfinite(u0)):
         raise ParameterError("the start point has non-finite entries; give finite values")
@@ -316,6 +298,7 @@ def continue_branch(problem: Problem, u0: np.ndarray, options: Options = Options
                 break
             continue
         new = _make_point(problem, u_new, last.tangent, last.arclength + ds, iterations)
+        _locate_marks(problem, last, new, ds, marks, special, points, options)
         crossed = _first_bound_crossed(problem, last.u, new.u)
         if crossed is not None:
             end = _locate_bound(problem, last, ds, crossed, options)
@@ -349,7 +332,7 @@ def continue_branch(problem: Problem, u0: np.ndarray, options: Options = Options
     if dropped:
         message += (f"; {len(dropped)} sign change(s) of a test function not located as a zero (a pole, a "
                     f"discontinuity or a corrector failure): {', '.join(dropped)}")
-    _label(special)
+    label_points(special)
     return Branch(points, special, status, message, options)
 
 
@@ -367,7 +350,24 @@ def _first_bound_crossed(problem: Problem, u_old, u_new):
     return None
 
 
-def _locate_bound(problem, last: Point, ds: float, crossed, options) -> Point | None:
+def _locate_marks(problem, last: Point, new: Point, ds: float, marks, special: list, points: list,
+                  options: Options) -> None:
+    """The points at the ``marks`` of the first parameter passed between ``last`` and ``new``, in order."""
+    index = problem.parameters[0]
+    a, b = last.u[index], new.u[index]
+    found = []
+    for value in marks:
+        if (a < value <= b) or (b <= value < a):
+            point = _locate_bound(problem, last, ds, (index, float(value)), options, "user")
+            if point is not None:
+                found.append(point)
+    for point in sorted(found, key=lambda p: p.arclength):
+        points.append(point)
+        special.append(SpecialPoint("user", len(points) - 1, point.u, point.eigenvalues, 0.0,
+                                    problem.describe("user", point.u)))
+
+
+def _locate_bound(problem, last: Point, ds: float, crossed, options, kind: str = "bound") -> Point | None:
     """The branch point on the bound (Brent on the arclength); None if the corrector fails there."""
     index, bound = crossed
 
@@ -383,7 +383,7 @@ def _locate_bound(problem, last: Point, ds: float, crossed, options) -> Point | 
     if u is None:
         return None
     u[index] = bound  # exact: the corrector solved to round-off
-    return _make_point(problem, u, last.tangent, last.arclength + sigma, 0, "bound")
+    return _make_point(problem, u, last.tangent, last.arclength + sigma, 0, kind)
 
 
 # ----------------------------------------------------------------------------- special points
@@ -456,18 +456,6 @@ def _locate(problem, kind: str, last: Point, new: Point, options: Options):
 REJECTED = object()  # _locate: a zero the problem declines (no special point, nothing to report)
 
 
-LABELS = {"fold": "LP", "branch_point": "BP", "hopf": "HOPF", "bogdanov_takens": "BT", "zero_hopf": "ZH",
-          "double_hopf": "HH", "bautin": "GH", "cusp": "CP", "line_saddle_change": "LS",
-          "line_focus_node": "LF", "period_doubling": "PD", "neimark_sacker": "NS", "homoclinic": "HC"}
-
-
-def _label(special: list) -> None:
-    counts: dict[str, int] = {}
-    for sp in special:
-        counts[sp.kind] = counts.get(sp.kind, 0) + 1
-        sp.label = LABELS.get(sp.kind, sp.kind.upper()) + str(counts[sp.kind])
-
-
 def continue_both_ways(problem: Problem, u0: np.ndarray, options: Options = Options(), detect: bool = True) -> Branch:
     """The branch through u0 in both directions, as one branch ordered from one end to the other
     (arclength 0 at u0, negative on the first part)."""
@@ -482,6 +470,6 @@ def continue_both_ways(problem: Problem, u0: np.ndarray, options: Options = Opti
                for sp in reversed(backward.special_points)]
     special += [SpecialPoint(sp.kind, n_back - 1 + sp.index, sp.u, sp.eigenvalues, sp.value, sp.data)
                 for sp in forward.special_points]
-    _label(special)
+    label_points(special)
     status = "completed" if backward.status == forward.status == "completed" else "corrector_failed"
     return Branch(points, special, status, f"one end: {backward.message}; other end: {forward.message}", options)

@@ -23,7 +23,7 @@ from .continuation import Branch
 from .system import System
 
 SPECIAL_KINDS = {"bound": 0, "fold": 1, "branch_point": 2, "hopf": 3, "bogdanov_takens": 4, "zero_hopf": 5,
-                 "double_hopf": 6, "bautin": 7, "cusp": 8, "line_saddle_change": 9, "line_focus_node": 10}
+                 "double_hopf": 6, "bautin": 7, "cusp": 8, "line_saddle_change": 9, "line_focus_node": 10, "user": 11}
 """int8 codes of ``special_kind`` in continuation datasets (flag_values / flag_meanings)."""
 
 
@@ -121,6 +121,10 @@ def special_point(ds: xr.Dataset, label: str, kinds: dict = SPECIAL_KINDS) -> tu
 def check_system(ds: xr.Dataset, system: System) -> None:
     """DatasetError unless ``ds`` was computed for ``system`` (the same equations and names)."""
     stored = ds.attrs.get("system_key")
+    if stored is None:  # written before datasets carried the fingerprint: the name and the states must match
+        names = str(ds.attrs.get("state_names", " ".join(system.state_names))).split()
+        if ds.attrs.get("system") == system.name and names == list(system.state_names):
+            return
     if stored != system.key:
         raise DatasetError(f"the dataset belongs to system {ds.attrs.get('system', '?')!r} (key {stored}), not to "
                            f"{system.name!r} (key {system.key}); pass the System the dataset was computed with")

@@ -13,6 +13,7 @@ Integrators are templates: an analysis copies one (``copy.copy``) before it chan
 
 from __future__ import annotations
 
+import copy
 import hashlib
 import threading
 from dataclasses import dataclass
@@ -34,6 +35,9 @@ RESERVED = frozenset({
 """Names the generic datasets use for their own dimensions and variables: no state, parameter or
 observable may take one (a dataset could not hold both)."""
 
+_COMPILED: dict = {}  # (System.key, what) -> compiled object: shared by Systems of the same equations
+_LOCK = threading.RLock()
+
 DIRECTIONS = {"negative": hy.event_direction.negative, "positive": hy.event_direction.positive,
               "any": hy.event_direction.any}
 
@@ -51,6 +55,10 @@ class Event:
         if self.direction not in DIRECTIONS:
             raise ParameterError(f"event {self.name!r}: direction {self.direction!r}; give one of "
                                  f"{', '.join(DIRECTIONS)}")
+
+
+def _article(word: str) -> str:
+    return ("an " if word[0] in "aeiou" else "a ") + word
 
 
 def parameter_indices(expressions) -> set[int]:
@@ -99,13 +107,18 @@ class System:
         self.description = description
         self._check_names()
         self._check_parameters()
-        self._cache: dict = {}
-        self._lock = threading.RLock()
+        self._key = None
 
     # -- declaration checks
     def _check_names(self) -> None:
         groups = {"state": self.state_names, "parameter": self.parameter_names,
-                  "observable": tuple(self.observables), "integral": tuple(self.integrals)}
+                  "observable": tuple(self.observables),
+                  # a first integral may carry the name of the observable it is (the same expression)
+                  "integral": tuple(k for k in self.integrals if k not in self.observables)}
+        for k, e in self.integrals.items():
+            if k in self.observables and str(self.observables[k][0]) != str(e):
+                raise ParameterError(f"system {self.name!r}: the integral {k!r} differs from the observable {k!r}; "
+                                     "give it another name or the same expression")
         seen: dict[str, str] = {}
         for kind, names in groups.items():
             for n in names:
@@ -116,8 +129,8 @@ class System:
                     raise ParameterError(f"system {self.name!r}: {kind} name {n!r} is reserved by the datasets "
                                          f"(they hold a {n!r} of their own); rename it")
                 if n in seen:
-                    raise ParameterError(f"system {self.name!r}: the name {n!r} is both a {seen[n]} and a {kind}; "
-                                         "give distinct names")
+                    raise ParameterError(f"system {self.name!r}: the name {n!r} is both {_article(seen[n])} and "
+                                         f"{_article(kind)}; give distinct names")
                 seen[n] = kind
 
     def _check_parameters(self) -> None:
@@ -142,9 +155,23 @@ class System:
 
     @property
     def key(self) -> str:
-        """A fingerprint of the equations (datasets store it; a stored branch is continued with the same System)."""
-        text = "|".join([self.name, *map(str, self.rhs), *self.parameter_names])
-        return hashlib.sha256(text.encode()).hexdigest()[:16]
+        """A fingerprint of the declaration but the default parameter values: its name, names and expressions
+        (datasets store it; a stored branch is continued with the same System; compiled code is shared by it)."""
+        if self._key is None:
+            parts = [self.name, *self.state_names, *map(str, self.variables), *map(str, self.rhs),
+                     *self.parameter_names, *(f"{k}={e}" for k, (e, _u) in self.observables.items()),
+                     *(f"{k}={e}" for k, e in self.integrals.items()),
+                     *(f"{e.name}:{e.direction}={e.expression}" for e in self.events), str(self.compact_mode)]
+            self._key = hashlib.sha256("|".join(parts).encode()).hexdigest()[:16]
+        return self._key
+
+    def with_defaults(self, pars=None, **values) -> System:
+        """The same system with other default parameter values (``pars`` and/or by name); it shares the
+        compiled code."""
+        new = copy.copy(self)
+        new.pars = self.with_pars(pars, **values)
+        new.parameters = dict(zip(self.parameter_names, map(float, new.pars)))
+        return new
 
     def parameter_index(self, name: str) -> int:
         if name not in self.parameter_names:
@@ -179,17 +206,19 @@ class System:
                 "system_equations": "; ".join(self.equations()),
                 "system_parameters": "; ".join(f"{k} = {float(v)!r}" for k, v in zip(self.parameter_names, pars))}
 
-    # -- compiled code (built on demand, cached per instance)
+    # -- compiled code (built on demand, cached for every System of these equations)
     def _cached(self, key, what: str, build):
-        with self._lock:
-            if key not in self._cache:
+        with _LOCK:
+            full = (self.key, key)
+            if full not in _COMPILED:
                 with compiling(f"{what} of {self.name}"):
-                    self._cache[key] = build()
-            return self._cache[key]
+                    _COMPILED[full] = build()
+            return _COMPILED[full]
 
     def compiled_count(self) -> int:
-        """How many compiled objects this System holds (a second analysis should add none it already built)."""
-        return len(self._cache)
+        """How many compiled objects exist for these equations (a second analysis should add none it reuses)."""
+        with _LOCK:
+            return sum(1 for k in _COMPILED if k[0] == self.key)
 
     def field(self, pins=(), parameters=()) -> Field:
         """The right-hand side followed by the observables named in ``pins``, with exact derivative tensors with
@@ -203,6 +232,26 @@ class System:
         outputs = [*self.rhs, *(self.observables[p][0] for p in pins)]
         return self._cached(("field", pins, indices), "the derivative tensors",
                             lambda: Field(outputs, self.variables, [hy.par[i] for i in indices]))
+
+    def integrals_field(self) -> Field:
+        """The first integrals (declaration order) with exact derivative tensors with respect to the states."""
+        exprs = list(self.integrals.values())
+        return self._cached(("integrals",), "the first integrals", lambda: Field(exprs, self.variables))
+
+    def jacobian_function(self):
+        """cfunc of the Jacobian d rhs / d x, row-major (n * n outputs), for batches of states."""
+        def build():
+            jac = hy.diff_tensors(list(self.rhs), diff_args=list(self.variables), diff_order=1).jacobian
+            return hy.cfunc(list(np.asarray(jac).ravel()), list(self.variables))
+
+        return self._cached(("jacobian",), "the Jacobian", build)
+
+    def jacobian(self, states, pars=None) -> np.ndarray:
+        """Exact Jacobians at states (n,) or (n, N): (n, n) or (N, n, n)."""
+        x = np.asarray(states, dtype=float)
+        out = self.evaluate(self.jacobian_function(), x.reshape(self.n, -1), self.pars if pars is None else pars)
+        J = out.T.reshape(-1, self.n, self.n)
+        return J[0] if x.ndim == 1 else J
 
     def rhs_function(self):
         """cfunc of the right-hand side over the states."""
@@ -239,31 +288,36 @@ class System:
         return dict(zip(self.observables, self.evaluate(cf, states, self.pars if pars is None else pars)))
 
     def taylor(self, tol: float, *, batch: int = 0, tangents: int = 0, parameters=(), events: bool = False,
-               extra=()):
+               extra=(), compact_mode: bool | None = None):
         """A Taylor integrator template (copy it before use).
 
         batch: SIMD lanes (0: scalar); tangents: k first-order variations with respect to the first k initial
         states (Lyapunov vectors; ``parameters`` adds variations with respect to those runtime parameters,
         names or indices, after ``tangents`` = n for shooting); events: the System's terminal events;
-        extra: (variable, rhs) pairs appended to the system (quadratures such as a divergence integral).
+        extra: (variable, rhs) pairs appended to the system (quadratures such as a divergence integral);
+        compact_mode: heyoka's compact mode (default the System's).
         The state holds x, then the variations (heyoka's var_ode_sys layout), then ``extra``; the integrator's
         ``pars`` hold the first ``len(ta.pars)`` runtime parameters (those up to the last one its equations use).
         """
         indices = tuple(i if isinstance(i, int) else self.parameter_index(i) for i in parameters)
         extra = tuple(extra)
-        key = ("taylor", float(tol), int(batch), int(tangents), indices, bool(events), tuple(map(str, extra)))
+        compact = self.compact_mode if compact_mode is None else bool(compact_mode)
+        key = ("taylor", float(tol), int(batch), int(tangents), indices, bool(events), tuple(map(str, extra)), compact)
 
         def build():
             sys = list(zip(self.variables, self.rhs))
             if tangents or indices:
-                args = [*self.variables[:tangents], *(hy.par[i] for i in indices)]
-                sys = hy.var_ode_sys(sys, args, order=1)
-            sys = list(sys) + list(extra)
-            size = len(sys)
+                if extra:
+                    raise ParameterError("variational integrators take no extra equations")
+                sys = hy.var_ode_sys(sys, [*self.variables[:tangents], *(hy.par[i] for i in indices)], order=1)
+                equations = list(sys.sys)
+            else:
+                sys = equations = sys + list(extra)
+            size = len(equations)
             t_events = [e for e in self.events] if events else []
-            used = parameter_indices([f for _v, f in sys] + [e.expression for e in t_events])
+            used = parameter_indices([f for _v, f in equations] + [e.expression for e in t_events])
             n_par = max(used) + 1 if used else 0  # heyoka wants exactly the parameters the equations use
-            kwargs = {"tol": float(tol), "compact_mode": self.compact_mode}
+            kwargs = {"tol": float(tol), "compact_mode": compact}
             if batch:
                 if t_events:
                     kwargs["t_events"] = [hy.t_event_batch(e.expression, direction=DIRECTIONS[e.direction])

@@ -1,0 +1,257 @@
+"""Branches of periodic orbits of a :class:`.system.System` by pseudo-arclength continuation of the shooting
+problem (:mod:`.shooting`), started at an orbit or at a Hopf point, and their special points.
+
+**At a Hopf point** (:func:`hopf_start`, :func:`orbit_branch`) the branch starts as AUTO's does: with the
+parameter free, from the zero-amplitude orbit x(t) = x_H (period T_H = 2 pi / omega) along the branch's tangent,
+the critical eigenvector's rotation Re(q exp(i omega t)) with no change of T and p (both change to second
+order in the amplitude), by the arclength-constrained corrector. At a fixed parameter the orbits next to a
+Hopf point are ill-conditioned (p - p_H ~ r^2): the constraint on the amplitude removes that.
+
+**Special points** along a branch (test functions on the nontrivial multipliers mu_i, each located by Brent's
+method on the arclength, on a smooth function: |mu| - 1 of the critical multiplier(s)):
+
+* ``fold`` of cycles (LP): the tangent's parameter component changes sign (a multiplier passes +1);
+* ``branch_point`` of cycles (BP): prod (mu_i - 1) changes sign without a fold;
+* ``period_doubling`` (PD): prod (mu_i + 1) changes sign (a real multiplier through -1);
+  :func:`switch_period_doubling` continues the emanating orbit of twice the period;
+* ``neimark_sacker`` (NS): prod_{i<j} (mu_i mu_j - 1) changes sign and the critical pair is complex
+  (a reciprocal real pair, a neutral saddle, is rejected); the rotation angle arg mu is reported;
+* ``hopf`` (H): the amplitude x_0 - x(T/2) changes sign: the branch reached the equilibrium it was born
+  from and ends there;
+* approach to a **homoclinic** orbit (HC): the period grows without bound; the branch stops at the
+  period bound and reports the last periods and the limiting parameter extrapolated from
+  p - p_hc ~ exp(-lambda T).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import xarray as xr
+
+from ..errors import ParameterError
+from . import continuation
+from .datasets import point_of, special_point
+from .flows import TAYLOR_TOL
+from .orbit_datasets import branch_dataset
+from .orbits import integral_levels
+from .shooting import N_SAMPLES, PeriodicOrbit, ShootingProblem
+from .system import System
+
+
+def orbit_problem(orbit: PeriodicOrbit, parameter: str, *, parameter_scale: float = 1.0, bounds: dict | None = None,
+                  segments: int | None = None, phase: str = "poincare", period_max: float | None = None,
+                  tol: float = TAYLOR_TOL) -> tuple[ShootingProblem, np.ndarray]:
+    """The continuation problem through ``orbit`` in ``parameter`` and its start unknowns u0."""
+    if not orbit.converged:
+        raise ParameterError(f"the start is not a periodic orbit (status {orbit.status}): {orbit.message}")
+    system = orbit.system
+    k = None if parameter in system.integrals else system.parameter_index(parameter)
+    bounds = dict(bounds or {})
+    if period_max is not None:
+        bounds["T"] = (0.0, float(period_max))
+    m = segments or len(orbit.states)
+    levels = integral_levels(system, orbit.states[0], orbit.pars)
+    value = levels[parameter] if k is None else orbit.pars[k]
+    prob = ShootingProblem(system, orbit.pars, segments=m, phase=phase, parameter=parameter,
+                           parameter_scale=parameter_scale, period_scale=orbit.period, bounds=bounds, tol=tol,
+                           levels=levels)
+    u0 = (np.concatenate([orbit.states.ravel(), [orbit.period, value]]) if m == len(orbit.states)
+          else prob.unknowns(orbit.states[0], orbit.period, value))
+    return prob, u0
+
+
+def continue_orbits(orbit: PeriodicOrbit, parameter: str, *, bounds: dict | None = None, direction: int = 1,
+                    both_ways: bool = False, options: continuation.Options | None = None, **problem_options):
+    """The branch of periodic orbits through ``orbit`` in ``parameter`` by PALC, with its special points
+    (fold of cycles, branch point, period doubling, Neimark-Sacker, approach to a homoclinic orbit at the
+    period bound ``period_max``). Returns (Branch, ShootingProblem)."""
+    prob, u0 = orbit_problem(orbit, parameter, bounds=bounds, **problem_options)
+    options = options or continuation.Options(ds=0.02, ds_max=0.1, max_points=200)
+    if both_ways:
+        br = continuation.continue_both_ways(prob, u0, options)
+    else:
+        br = continuation.continue_branch(prob, u0, options, direction=direction)
+    _mark_homoclinic(prob, br)
+    return br, prob
+
+
+def _mark_homoclinic(prob: ShootingProblem, br: continuation.Branch) -> None:
+    """If the branch ended at the period bound with the period growing and the parameter converging, add a
+    special point ``homoclinic`` at the last point with the limit p_hc of p - p_hc ~ A exp(-lam T)."""
+    if prob.t_index not in prob.bounds or not br.points:
+        return
+    T_max = prob.bounds[prob.t_index][1]
+    last = br.points[-1]
+    if last.special != "bound" or abs(last.u[prob.t_index] - T_max) > 1e-9 * T_max:
+        return
+    T = np.array([p.u[prob.t_index] for p in br.points])
+    P = np.array([p.u[prob.t_index + 1] for p in br.points])
+    limit, rate = homoclinic_limit(T, P)
+    data = {"period": float(T[-1]), "limit": limit, "rate": rate, "last_periods": T[-5:].tolist(),
+            "last_values": P[-5:].tolist()}
+    br.special_points.append(continuation.SpecialPoint("homoclinic", len(br.points) - 1, last.u, last.eigenvalues,
+                                                       float(P[-1] - limit), data))
+    continuation.label_points(br.special_points)
+    br.message += (f"; the period grew to {T[-1]:.6g} (from {T[0]:.6g}) while {prob.parameter} converged: approach "
+                   f"to a homoclinic orbit at {prob.parameter} ~ {limit:.8g} (p - p_hc ~ exp(-{rate:.4g} T))")
+
+
+def homoclinic_limit(T: np.ndarray, P: np.ndarray) -> tuple[float, float]:
+    """(p_hc, lam) of p = p_hc + A exp(-lam T) through the last points of a branch whose period grows
+    (least squares in log|dp/dT| = log(lam A) - lam T, then p_hc = p + (dp/dT) / lam at the last point)."""
+    order = np.argsort(T)
+    T, P = T[order], P[order]
+    keep = T >= T[-1] - 0.5 * (T[-1] - T[0])
+    T, P = T[keep], P[keep]
+    dT, dP = np.diff(T), np.diff(P)
+    ok = (dT > 0) & (dP != 0)
+    if ok.sum() < 2:
+        return float(P[-1]), math.nan
+    Tm, slope = 0.5 * (T[1:] + T[:-1])[ok], (dP / dT)[ok]
+    fit = np.polyfit(Tm, np.log(np.abs(slope)), 1)
+    lam = -fit[0]
+    if not lam > 0:
+        return float(P[-1]), math.nan
+    return float(P[-1] + slope[-1] / lam * math.exp(-lam * (T[-1] - Tm[-1]))), float(lam)
+
+
+def switch_period_doubling(prob: ShootingProblem, br: continuation.Branch, label: str, *, h: float = 0.02,
+                           options: continuation.Options | None = None):
+    """Continue the orbit of twice the period emanating from the period-doubling point ``label`` of ``br``.
+
+    In the problem of period 2T (2m segments) the PD orbit traversed twice is a branch point whose second
+    kernel direction is the PD eigenvector v (M v = -v), propagated along the orbit: +phi(t_k) v on the first
+    pass, -phi(t_k) v on the second. The corrector with the constraint along that direction lands on the
+    doubled orbit. Returns (Branch, doubled ShootingProblem); ParameterError if it falls back onto the old one.
+    """
+    labels = [sp.label for sp in br.special_points]
+    if label not in labels:
+        raise ParameterError(f"no special point {label!r} on the branch; it has {', '.join(labels) or 'none'}")
+    sp = br.special_points[labels.index(label)]
+    if sp.kind != "period_doubling":
+        raise ParameterError(f"{label} is a {sp.kind} point; give a period-doubling point (PD)")
+    u = sp.u
+    X, T, p = prob.split(u)
+    ev = prob._evaluate(u)
+    vals, vecs = np.linalg.eig(ev["M"])
+    v = vecs[:, np.argmin(np.abs(vals + 1.0))].real
+    v /= np.linalg.norm(v / prob.system.state_scale)
+    m = prob.m
+    double = ShootingProblem(prob.system, prob.runtime(u), segments=2 * m, phase=prob.phase, parameter=prob.parameter,
+                             parameter_scale=prob.scale[-1], period_scale=2 * T,
+                             bounds={("T" if i == prob.t_index else prob.parameter):
+                                     ((2 * lo, 2 * hi) if i == prob.t_index else (lo, hi))
+                                     for i, (lo, hi) in prob.bounds.items()}, tol=prob.flow.tol,
+                             samples=2 * prob.samples, levels=prob.levels)
+    vk = [v]
+    for k in range(m - 1):
+        vk.append(_segment_phi(prob, u, k) @ vk[-1])
+    direction = np.concatenate([*vk, *(-w for w in vk), [0.0, 0.0]])
+    u2 = np.concatenate([X.ravel(), X.ravel(), [2 * T, p]])
+    d = direction / double.scale
+    d /= np.linalg.norm(d)
+    options = options or br.options
+    double.set_reference(u2)
+    v0 = u2 / double.scale
+    for sign in (1.0, -1.0):
+        start, _ = continuation.correct(double, (v0 + sign * h * d) * double.scale, (sign * d, v0, h), options)
+        if start is None:
+            continue
+        Xs = double.split(start)[0]
+        gap = np.max(np.abs(Xs[0] - Xs[m]) / np.asarray(prob.system.state_scale))
+        if gap > 1e-3 * h:
+            branch = continuation.continue_branch(double, start, options, tangent=sign * d)
+            _mark_homoclinic(double, branch)
+            return branch, double
+    raise ParameterError(f"no orbit of twice the period found next to {label} (the corrector fell back onto the "
+                         "old orbit); try a larger h")
+
+
+def _segment_phi(prob: ShootingProblem, u, k: int) -> np.ndarray:
+    X, T, _p = prob.split(u)
+    return prob.flow.variational(X[k], T / prob.m, prob.runtime(u))[1]
+
+
+# ---------------------------------------------------------------------------- the start at a Hopf point
+
+
+def _critical_pair(J: np.ndarray, scale: np.ndarray) -> tuple[float, np.ndarray]:
+    """(omega, q) of the eigenvalue pair nearest the imaginary axis: J q = i omega q, |q / scale| = 1."""
+    vals, vecs = np.linalg.eig(J)
+    tiny = 1e-9 * max(1.0, np.abs(vals).max())
+    upper = np.flatnonzero(vals.imag > tiny)
+    if not upper.size:
+        raise ParameterError("the equilibrium has no complex eigenvalue pair: not a Hopf point")
+    i = upper[np.argmin(np.abs(vals[upper].real))]
+    if abs(vals[i].real) > 1e-6 * abs(vals[i]):
+        raise ParameterError(f"the critical eigenvalues {vals[i]:.6g} are not on the imaginary axis: give a Hopf "
+                             "point (a located HOPF point of a branch)")
+    q = vecs[:, i] / np.linalg.norm(vecs[:, i] / scale)
+    return float(vals[i].imag), q
+
+
+def hopf_start(system: System, state, pars, parameter: str, *, segments: int = 4, phase: str = "integral",
+               bounds: dict | None = None, period_max: float | None = None, ds: float = 0.01,
+               parameter_scale: float = 1.0, tol: float = TAYLOR_TOL,
+               options: continuation.Options | None = None) -> tuple[ShootingProblem, np.ndarray, np.ndarray]:
+    """(problem, u, tangent): the first orbit of the branch born at the Hopf point (``state``, ``pars``) in
+    ``parameter``, at scaled arclength ``ds`` from the zero-amplitude orbit along the Hopf tangent (module
+    docstring), and the tangent to continue along. ``bounds`` {"T" or parameter: (low, high)}."""
+    pars = system.with_pars(pars)
+    k = system.parameter_index(parameter)
+    state = np.asarray(state, dtype=float)
+    omega, q = _critical_pair(system.jacobian(state, pars), system.state_scale)
+    period = 2 * math.pi / omega
+    bounds = dict(bounds or {})
+    if period_max is not None:
+        bounds["T"] = (0.0, float(period_max))
+    prob = ShootingProblem(system, pars, segments=segments, phase=phase, parameter=parameter,
+                           parameter_scale=parameter_scale, period_scale=period, bounds=bounds, tol=tol)
+    m = prob.m
+    base = np.concatenate([np.tile(state, m), [period, pars[k]]])
+    rotation = [(q * np.exp(2j * math.pi * j / m)).real for j in range(m)]  # Re(q e^{i omega t_j}), t_j = j T / m
+    tangent = np.concatenate([*rotation, [0.0, 0.0]]) / prob.scale
+    tangent /= np.linalg.norm(tangent)
+    options = options or continuation.Options()
+    v0 = base / prob.scale
+    for step in ds * 0.5 ** np.arange(6):  # a smaller first orbit if the corrector fails
+        guess = (v0 + step * tangent) * prob.scale
+        prob.set_reference(guess)
+        u, _it = continuation.correct(prob, guess, (tangent, v0, step), options)
+        if u is not None:
+            return prob, u, tangent
+    raise ParameterError(f"{system.name}: no periodic orbit next to the Hopf point at {parameter} = {pars[k]:.8g} "
+                         "(the corrector failed for every first step); check that it is a Hopf point")
+
+
+def orbit_branch(system: System, branch: xr.Dataset, label: str, *, bounds, segments: int = 4,
+                 phase: str = "integral", period_max: float | None = None, parameter_scale: float = 1.0,
+                 marks=(), options: continuation.Options | None = None, n_samples: int = N_SAMPLES,
+                 **option_keywords) -> xr.Dataset:
+    """The branch of periodic orbits born at Hopf point ``label`` of ``branch`` (a dataset of
+    :func:`.branches.equilibrium_branch` for ``system``), continued in the branch's parameter within ``bounds``
+    = (low, high), with its special points; ``period_max`` stops it at that period (the approach to a
+    homoclinic orbit is reported with its extrapolated parameter); ``marks``: parameter values where the orbits
+    are computed exactly (user points UZ1, ...). A dataset of kind ``periodic_orbits``."""
+    index, kind = special_point(branch, label)
+    if kind != "hopf":
+        raise ParameterError(f"{label} is a {kind} point; periodic orbits are born at a Hopf point")
+    parameters = branch.attrs.get("parameters", "").split()
+    if len(parameters) != 1:
+        raise ParameterError(f"{label} lies on a curve in {', '.join(parameters)}; give a branch in one parameter")
+    parameter = parameters[0]
+    state, pars = point_of(branch, system, index)
+    low, high = (float(b) for b in bounds)
+    if options is not None and option_keywords:
+        raise ParameterError("give either options=Options(...) or the option keywords (ds, ds_max, ...), not both")
+    options = options or continuation.Options(**({"ds": 0.02, "ds_max": 0.2, "max_points": 300} | option_keywords))
+    prob, u, tangent = hopf_start(system, state, pars, parameter, segments=segments, phase=phase,
+                                  bounds={parameter: (low, high)}, period_max=period_max,
+                                  parameter_scale=parameter_scale, options=options)
+    br = continuation.continue_branch(prob, u, options, tangent=tangent, marks=marks)
+    _mark_homoclinic(prob, br)
+    return branch_dataset(prob, br, {"source": "hopf", "source_label": label, "hopf_state": list(map(float, state)),
+                                     "hopf_value": float(pars[system.parameter_index(parameter)]),
+                                     "system_key": system.key}, n_samples)

@@ -1,0 +1,192 @@
+"""Periodic orbits and their branches as datasets of kind ``periodic_orbits``, for any :class:`.system.System`,
+and an orbit read back from one (continued later by passing the same ``System``)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import xarray as xr
+
+from ..errors import DatasetError, ParameterError
+from ..results import config_of, make_attrs
+from . import continuation
+from .datasets import check_system, flag_attrs
+from .flows import STABILITY, classify
+from .orbits import NEWTON_MAX_ITER, STATUS, find_orbit
+from .shooting import N_SAMPLES, PeriodicOrbit, ShootingProblem
+from .system import System
+
+SPECIAL_KINDS = {"bound": 0, "fold": 1, "branch_point": 2, "period_doubling": 3, "neimark_sacker": 4,
+                 "homoclinic": 5, "hopf": 6, "user": 7}
+"""int8 codes of ``special_kind`` in periodic-orbit datasets."""
+
+
+def branch_orbits(prob: ShootingProblem, br: continuation.Branch, n_samples: int = N_SAMPLES) -> list[PeriodicOrbit]:
+    """The orbits of a branch's points (samples, multipliers, amplitude measures)."""
+    return [prob.orbit(p.u, "converged", "", None, p.newton_iterations, n_samples) for p in br.points]
+
+
+def branch_dataset(prob: ShootingProblem, br: continuation.Branch, info: dict | None = None,
+                   n_samples: int = N_SAMPLES) -> xr.Dataset:
+    """A branch of periodic orbits as a dataset of kind ``periodic_orbits``."""
+    orbits = branch_orbits(prob, br, n_samples)
+    status = "completed" if br.status == "completed" else "partial"
+    labels = ", ".join(f"{sp.label} at {prob.parameter} = {sp.u[prob.t_index + 1]:.10g}" for sp in br.special_points)
+    message = f"branch of {len(orbits)} periodic orbits; {br.message}" + (f"; {labels}" if labels else "")
+    config = {"options": dataclasses.asdict(br.options), "segments": prob.m, "phase": prob.phase,
+              "tol": prob.flow.tol, "bounds": {prob.names[i]: list(b) for i, b in prob.bounds.items()},
+              **(info or {})}
+    return orbits_dataset(orbits, status, message, config, special=br.special_points, prob=prob,
+                          arclength=br.array("arclength"))
+
+
+def orbits_dataset(orbits: list[PeriodicOrbit], status: str, message: str, config: dict, *, special=(), prob=None,
+                   arclength=None, extra: dict | None = None) -> xr.Dataset:
+    """Orbits (or failed searches, by ``orbit_status``) as a dataset of kind ``periodic_orbits``.
+
+    Dims: point (orbit), floquet (multipliers by modulus), sample (along one period), state,
+    observable, runtime_parameter, special_point. Non-finite numbers of failed searches are stored as 0
+    with the point's ``orbit_status`` saying why (never a silent NaN).
+    """
+    import heyoka as hy
+
+    system: System = orbits[0].system
+    n, N = system.n, max(len(o.times) for o in orbits)
+    n_obs = len(system.observables)
+
+    def clean(a):
+        a = np.asarray(a, dtype=float)
+        return np.where(np.isfinite(a), a, 0.0)
+
+    def resample(o, a):
+        a = np.asarray(a, dtype=float)
+        return a if len(a) == N else np.repeat(a[:1], N, axis=0)
+
+    mu = np.array([o.multipliers for o in orbits])
+    stab = np.array([classify(o.multipliers, o.trivial) if o.converged or o.status == "not_converged"
+                     else (STABILITY["marginal"], 0) for o in orbits])
+    samples = np.array([resample(o, o.samples) for o in orbits])
+    times = np.array([o.times if len(o.times) == N else np.zeros(N) for o in orbits])
+    obs = np.array([resample(o, o.observables) for o in orbits]) if n_obs else np.zeros((len(orbits), N, 0))
+    pars = np.array([o.pars for o in orbits])
+    data = {
+        "period": ("point", clean([o.period for o in orbits]), {"units": "s", "long_name": "period T"}),
+        "amplitude": ("point", clean([o.amplitude for o in orbits]),
+                      {"units": "1", "long_name": "max_t |x(t) - mean x| in scaled states (x / state_scale)"}),
+        "orbit_status": ("point", np.array([STATUS[o.status] for o in orbits], np.int8),
+                         {"long_name": "outcome of the search: converged is a periodic orbit; equilibrium: Newton "
+                                       "converged to a point (no orbit); not_converged: residual in `residual`",
+                          "flag_values": np.array(list(STATUS.values()), np.int8), "flag_meanings": " ".join(STATUS)}),
+        "stability": ("point", stab[:, 0].astype(np.int8),
+                      {"long_name": "stability by the nontrivial Floquet multipliers (|mu| < 1: stable)",
+                       "flag_values": np.array(list(STABILITY.values()), np.int8),
+                       "flag_meanings": " ".join(STABILITY)}),
+        "n_unstable": ("point", stab[:, 1].astype(np.int32),
+                       {"units": "1", "long_name": "nontrivial multipliers outside the unit circle"}),
+        "residual": ("point", clean([min(o.residual, 1e300) for o in orbits]),
+                     {"units": "1", "long_name": "max |phi(x_k, T/m) - x_(k+1)| / state_scale of the (last) iterate"}),
+        "newton_iterations": ("point", np.array([o.iterations for o in orbits], np.int32),
+                              {"units": "1", "long_name": "Newton steps"}),
+        "multiplier_real": (("point", "floquet"), clean(mu.real),
+                            {"units": "1", "long_name": "Floquet multipliers (monodromy eigenvalues) by modulus, "
+                                                        "real part (of the last iterate unless converged)"}),
+        "multiplier_imag": (("point", "floquet"), clean(mu.imag),
+                            {"units": "1", "long_name": "Floquet multipliers, imaginary part"}),
+        "multiplier_trivial": (("point", "floquet"), np.array([o.trivial for o in orbits], np.int8),
+                               {"long_name": "1: a trivial multiplier (flow direction; families of solutions)",
+                                "flag_values": np.array([0, 1], np.int8), "flag_meanings": "nontrivial trivial"}),
+        "initial_state": (("point", "state"), clean([o.states[0] for o in orbits]),
+                          {"long_name": "x_0: the orbit's first point (phase condition)"}),
+        "state_min": (("point", "state"), clean(samples.min(axis=1)), {"long_name": "minimum over the orbit"}),
+        "state_max": (("point", "state"), clean(samples.max(axis=1)), {"long_name": "maximum over the orbit"}),
+        "orbit": (("point", "sample", "state"), clean(samples),
+                  {"long_name": "states along one period at sample_time (the initial state repeated for a failed "
+                                "search)"}),
+        "sample_time": (("point", "sample"), clean(times), {"units": "s", "long_name": "time along the orbit"}),
+        "runtime_parameters": (("point", "runtime_parameter"), clean(pars),
+                               {"long_name": "values of the system's runtime parameters"}),
+    }
+    if orbits[0].parameter:
+        data[orbits[0].parameter] = ("point", clean([o.value for o in orbits]),
+                                     {"long_name": f"continuation parameter {orbits[0].parameter}"})
+    if n_obs:
+        data["observable_min"] = (("point", "observable"), clean(obs.min(axis=1)),
+                                  {"long_name": "minimum over the orbit"})
+        data["observable_max"] = (("point", "observable"), clean(obs.max(axis=1)),
+                                  {"long_name": "maximum over the orbit"})
+        data["orbit_observables"] = (("point", "sample", "observable"), clean(obs),
+                                     {"long_name": "observables along the orbit"})
+    if arclength is not None:
+        data["arclength"] = ("point", np.asarray(arclength, float), {"units": "1", "long_name": "pseudo-arclength"})
+    data.update(_special_table(list(special), prob))
+    data.update(extra or {})
+    coords = {
+        "point": ("point", np.arange(len(orbits), dtype=np.int32), {"long_name": "orbit index (along the branch)"}),
+        "floquet": ("floquet", np.arange(n, dtype=np.int32), {"long_name": "multiplier index"}),
+        "sample": ("sample", np.arange(N, dtype=np.int32), {"long_name": "sample index along the orbit"}),
+        "state": ("state", np.array(system.state_names, dtype=str), {"long_name": "state variable"}),
+        "runtime_parameter": ("runtime_parameter", np.array(system.parameter_names[: pars.shape[1]], dtype=str),
+                              {"long_name": "runtime parameter"}),
+        "special_point": ("special_point", np.arange(len(special), dtype=np.int32), {"long_name": "special point"}),
+    }
+    if n_obs:
+        coords["observable"] = ("observable", np.array(list(system.observables), dtype=str),
+                                {"long_name": "observable",
+                                 "units": " ".join(u or "1" for _e, u in system.observables.values())})
+    config = {"system": system.name, "system_key": system.key, "description": system.description,
+              "heyoka_version": hy.__version__, **config}
+    attrs = make_attrs("periodic_orbits", config, status, message, **system.attrs(orbits[0].pars),
+                       parameter=orbits[0].parameter or "", labels=" ".join(sp.label for sp in special),
+                       n_orbits=int(sum(o.converged for o in orbits)))
+    return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+def _special_table(special: list, prob) -> dict:
+    def get(key):
+        return np.array([float(np.ravel([sp.data.get(key, 0.0)])[0]) if np.isfinite(
+            np.ravel([sp.data.get(key, 0.0)])[0]) else 0.0 for sp in special])
+
+    return {
+        "special_kind": ("special_point", np.array([SPECIAL_KINDS[sp.kind] for sp in special], np.int8),
+                         flag_attrs("type of the special point", SPECIAL_KINDS)),
+        "special_label": ("special_point", np.array([sp.label for sp in special], dtype=str),
+                          {"long_name": "label: LP fold of cycles, BP branch point, PD period doubling, NS "
+                                        "Neimark-Sacker, HC approach to a homoclinic orbit"}),
+        "special_index": ("special_point", np.array([sp.index for sp in special], np.int32),
+                          {"long_name": "index along dim point"}),
+        "special_value": ("special_point", np.array([sp.value if np.isfinite(sp.value) else 0.0 for sp in special]),
+                          {"long_name": "located test function (|mu| - 1 of the critical multiplier; HC: p - p_hc)"}),
+        "special_multiplier_real": ("special_point", get("multiplier_real"),
+                                    {"long_name": "critical multiplier, real part"}),
+        "special_multiplier_imag": ("special_point", get("multiplier_imag"),
+                                    {"long_name": "critical multiplier, imaginary part"}),
+        "special_angle": ("special_point", get("angle"), {"units": "rad", "long_name": "NS: rotation angle arg mu"}),
+        "special_limit": ("special_point", get("limit"), {"long_name": "HC: extrapolated parameter of the homoclinic "
+                                                                       "orbit"}),
+    }
+
+
+def orbit_from_dataset(ds: xr.Dataset, point: int, system: System, *, max_iter: int = NEWTON_MAX_ITER) -> PeriodicOrbit:
+    """The orbit stored at ``point`` of a dataset of kind ``periodic_orbits`` of ``system``, corrected by Newton
+    (runtime parameters, first point, period, segments and phase condition come from the dataset)."""
+    if ds.attrs.get("kind") != "periodic_orbits":
+        raise DatasetError(f"the dataset is of kind {ds.attrs.get('kind')!r}; give a periodic_orbits dataset "
+                           "(orbit_branch, tippedisk periodic-orbits)")
+    check_system(ds, system)
+    n_points = ds.sizes["point"]
+    if not -n_points <= point < n_points:
+        raise ParameterError(f"point {point} does not exist; the dataset has points 0 .. {n_points - 1}")
+    if int(ds.orbit_status.values[point]) != STATUS["converged"]:
+        status = list(STATUS)[int(ds.orbit_status.values[point])]
+        raise ParameterError(f"point {point} is not a periodic orbit (orbit_status {status}); give a converged point")
+    config = config_of(ds)
+    pars = ds.runtime_parameters.values[point]
+    orbit = find_orbit(system, ds.initial_state.values[point], float(ds.period.values[point]),
+                       np.concatenate([pars, np.asarray(system.pars)[len(pars):]]),
+                       segments=int(config.get("segments", 1)), phase=config.get("phase", "poincare"),
+                       max_iter=max_iter)
+    parameter = ds.attrs.get("parameter") or None
+    if parameter:
+        orbit.parameter, orbit.value = parameter, float(orbit.pars[system.parameter_index(parameter)])
+    return orbit
