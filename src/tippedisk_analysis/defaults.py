@@ -90,7 +90,7 @@ EIG_RTOL = 1e-9
 CRITICAL_RTOL = 1e-10
 """brentq relative tolerance on critical spin speeds Omega_c (1e-6 rad/s is required)."""
 
-# --- Sweeps (outcome maps and other chunked grids), analysis/sweeps.py ---
+# --- Sweeps (outcome maps and other chunked grids), dynamics/sweeps.py ---
 CHUNK_SIZE = 128
 """Grid points per stored chunk: ~1 s of work, so an interrupted sweep loses little."""
 

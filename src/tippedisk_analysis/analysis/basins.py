@@ -41,8 +41,9 @@ from ..parameters import Disk, Friction, InitialState, Setup, to_dict
 from ..ranges import parse_range
 from ..results import describe as describe_units
 from ..results import make_attrs
-from . import attractors as at
-from . import stability, sweeps
+from ..dynamics import attractors as at
+from ..dynamics import sweeps
+from . import stability
 from . import stationary as st
 from .reduced import STATE_NAMES as REDUCED_NAMES
 from .reduced import full_from_reduced, reduced_from_full
@@ -632,7 +633,7 @@ def _point_data(dims, shape, results, outcome, table, reorder=None):
     data = {"outcome": (dims, values(outcome), {
         "units": "1", "long_name": "attractor id (>= 0, see dimension attractor) or negative label",
         "flag_values": flag_values, "flag_meanings": flag_meanings,
-        "classification": "recurrences in a cell grid (analysis/attractors.py, analysis/basins.py)"})}
+        "classification": "recurrences in a cell grid (dynamics/attractors, analysis/basins.py)"})}
     data["assignment_time"] = (dims, values(results["t_assign"], float), {
         "units": "s", "long_name": "time at which the run was assigned to an attractor or labelled"})
     for name, (dtype, units, long_name) in POINT_VARIABLES.items():

@@ -27,7 +27,8 @@ from ..models import ode
 from ..parameters import Disk, Friction, InitialState, Setup, to_dict
 from ..ranges import check_axis, check_range
 from ..results import VARIABLES, describe, make_attrs
-from . import poincare, sweeps
+from ..dynamics import sweeps
+from . import poincare
 
 STATUS = {"completed": 0, "fell": 1, "nonfinite": 2}
 ANGLES = ("alpha", "gamma")  # stored wrapped into (-pi, pi] as ``value``

@@ -23,7 +23,7 @@ from ..dynamics.lyapunov import DT, TOL, LyapunovResult, initial_frame, spectrum
 from ..dynamics.systems import textbook_system
 from ..errors import ParameterError
 from ..results import make_attrs
-from . import sweeps
+from ..dynamics import sweeps
 from .orbits import tippedisk_system
 
 OUTCOMES = {"completed": 0, "fell": 1, "lift_off": 2, "failed": 3}

@@ -56,7 +56,8 @@ from ..models import ode
 from ..parameters import Disk, Friction, InitialState, Setup, eccentricity_columns, to_dict
 from ..ranges import check_range
 from ..results import describe, make_attrs
-from . import basins, sweeps
+from ..dynamics import sweeps
+from . import basins
 
 MODEL = "ode-euler"
 OUTCOMES = {"not_inverted": 0, "inverted": 1, "fell": 2, "undecided": 3, "failed": 4, "rolling": 5}
@@ -541,7 +542,7 @@ def _assemble_attractors(config: MapConfig, results: dict) -> xr.Dataset:
     data = {"outcome": (dims, grid_values(outcome), {
         "units": "1", "long_name": "attractor id (>= 0, see dimension attractor) or negative label",
         "flag_values": flag_values, "flag_meanings": flag_meanings,
-        "classification": "recurrences in a cell grid (analysis/attractors.py, analysis/basins.py)"})}
+        "classification": "recurrences in a cell grid (dynamics/attractors, analysis/basins.py)"})}
     data["assignment_time"] = (dims, grid_values(results["t_assign"]), {
         "units": "s", "long_name": "time at which the run was assigned to an attractor or labelled"})
     for name, (dtype, units, long_name) in basins.POINT_VARIABLES.items():

@@ -1,0 +1,64 @@
+"""Attractors found by recurrences in a cell grid: a generic core that knows nothing of the disk.
+
+Modules: :mod:`.records` (grid, settings, descriptions), :mod:`.problem` (the contract and the generic
+description), :mod:`.mapping` (the state machine), :mod:`.tables` (merging, matching, columns),
+:mod:`.system_problem` (the problem of any :class:`~tippedisk_analysis.dynamics.System` and its basins).
+
+The method is the one of Datseris & Wagemakers (Chaos 32, 023104, 2022) used by Attractors.jl's
+``AttractorsViaRecurrences``: integrate an initial condition, sample it every ``dt``, map each sample
+(through an observation ``y = observe(x)``) to a cell of a grid, and run a small state machine on the
+cells. No list of attractors is given beforehand; they are found on the fly, and once found they make
+every later run that enters their cells stop early. Implemented here from the description of the
+method (not from its code), on heyoka batch integrators (SIMD lanes) with lanes refilled as runs end.
+
+State machine of one run (counts are consecutive samples; settings in :class:`RecurrenceSettings`):
+
+1. *search*: a sample in a cell of a known attractor of the same parameter group counts towards
+   ``consecutive_attractor_steps``; reached -> the run is assigned to that attractor (early stop).
+   A sample in a cell this run visited before counts towards ``consecutive_recurrences``; reached ->
+   *locate*. A new cell resets that count. Outside the grid for ``consecutive_lost_steps`` samples ->
+   ``left_grid``.
+2. *locate*: ``attractor_locate_steps`` more samples are recorded; their cells form the candidate.
+   If most of them (``overlap``) already belong to one known attractor the run is assigned to it.
+   Otherwise the problem describes the candidate (:meth:`Problem.describe`, by default
+   :func:`describe`); a description makes it a new attractor whose cells join the table, ``None``
+   rejects it (e.g. the amplitude grows) and the run returns to *search* with its visited cells
+   forgotten. A description marked ``transient`` (a slowly evolving state that a problem can
+   recognise, e.g. by a drifting energy) labels the run but keeps its cells out of the table, so it
+   stops no other run. Both are additions to the published method: they keep slowly escaping or
+   drifting transients from claiming cells that belong to an attractor's neighbourhood.
+3. a terminal event of the integrator ends the run with the problem's label for it (e.g. ``fell``);
+   a non-finite state with ``failed``; the maximum horizon with ``undecided`` (the only way to get it).
+
+Labels: attractors get ids 0, 1, ... (per call of :func:`map_points`); the others are negative:
+:data:`SPECIAL_LABELS` followed by the problem's terminal labels (-4, -5, ...).
+
+Kinds (:func:`describe`, from the recorded samples y_k, k = 1..L, in cell units): with a1, a2 the
+largest peak-to-peak ranges over the first and the second half of the window,
+
+* ``equilibrium``: a2 <= ``equilibrium_spread`` (cells) or a2 <= ``decay_ratio`` a1 (it converges);
+  the representative state is the last sample, improved by :meth:`Problem.refine_equilibrium`;
+* growing (a2 > ``growth_ratio`` a1): rejected;
+* ``periodic``: the run returns to its last sample within ``return_distance`` cells; period and
+  amplitude from a re-integration sampled ``refine_samples`` times per period (upward crossings of the
+  first observed coordinate through its mean, located on the dense output to round-off);
+* ``irregular``: otherwise.
+Problems may add kinds (the tippedisk adds ``rolling``).
+
+Parameter groups: runs with the same ``group`` number share their attractor cells (same parameters);
+different groups never do. Attractors of different groups, chunks or parameter values are identified
+afterwards by :func:`merge` (within one parameter point: the problem's ``same_attractor``) and
+:func:`match` (across parameter values, "global continuation": nearest by the problem's distance,
+within a threshold, each previous attractor used at most once; unmatched ones get new ids).
+"""
+
+from .mapping import MapResult, map_points
+from .problem import (DescribeContext, Problem, _circular_mean, combine, converging, describe,  # noqa: F401
+                      equilibrium_description, growing, spreads)
+from .records import BASE_KINDS, SPECIAL_LABELS, Candidate, Description, FirstTime, Found, Grid, RecurrenceSettings
+from .tables import assemble_table, chunk_result, column_names, from_columns, match, merge, to_columns
+
+__all__ = ["BASE_KINDS", "SPECIAL_LABELS", "Candidate", "DescribeContext", "Description", "FirstTime", "Found", "Grid",
+           "MapResult", "Problem", "RecurrenceSettings", "assemble_table", "chunk_result", "column_names", "combine",
+           "converging", "describe", "equilibrium_description", "from_columns", "growing", "map_points", "match",
+           "merge", "spreads", "to_columns"]
