@@ -13,10 +13,12 @@ import pytest
 import xarray as xr
 
 from tippedisk_analysis import ParameterError, load
+from tippedisk_analysis.analysis import outcome_config
 from tippedisk_analysis.analysis import outcome_map as om
 from tippedisk_analysis.analysis import sweeps
 from tippedisk_analysis.cli import main
 from tippedisk_analysis.models import ode
+from tippedisk_analysis.parameters import Disk
 from tippedisk_analysis.testing import outcome_chunk_scalar
 
 SRC = str(Path(__file__).resolve().parents[1] / "src")
@@ -34,12 +36,12 @@ def test_fast_point_preparation_matches_the_parameter_dataclasses():
     """_prepare edits the base parameter vector; the validated dataclasses must give the same runs."""
     cfg = om.MapConfig(ranges={"omega": (-50, 80, 5), "eps": (0.01, 0.3, 3), "mu": (0.1, 0.5, 2),
                                "e": (1e-3, 4e-3, 2), "dgamma0": (0.05, 0.2, 2)}, t_end=0.1)
-    x0, pars = om._prepare(cfg, 0, cfg.n_points)
+    x0, pars = outcome_config.prepare(cfg, 0, cfg.n_points)
     for i in range(0, cfg.n_points, 7):
         point = {k: v[0] for k, v in cfg.points(i, i + 1).items()}
-        setup, initial = om._point_setup(cfg.base_setup(), point)
+        setup, initial = outcome_config.point_setup(cfg.base_setup(), point)
         np.testing.assert_array_equal(pars[:, i], ode.parameter_vector(setup, cfg.fall_angle, cfg.slip_smoothing))
-        np.testing.assert_array_equal(x0[:-2, i], ode.initial_state_vector(om.ode.EULER, setup, initial))
+        np.testing.assert_array_equal(x0[:-2, i], ode.initial_state_vector(ode.EULER, setup, initial))
         assert initial.alpha_dot == point["omega"] and initial.gamma == pytest.approx(-np.pi / 2 + point["dgamma0"])
 
 
@@ -61,7 +63,7 @@ def test_classification_follows_the_paper():
     assert int(paper["outcome"]) == om.OUTCOMES["inverted"]
     assert 0 < float(paper["inversion_time"]) < 0.5
     assert float(paper["fall_time"]) == om.FILL_TIME
-    disk = om.Disk()
+    disk = Disk()
     assert float(paper["z_S_mean"]) > disk.r  # S above G on average in the window
     assert int(slow["outcome"]) == om.OUTCOMES["fell"]
     assert 0 < float(slow["fall_time"]) == float(slow["t_final"]) < 2.0

@@ -351,6 +351,20 @@ def test_cli_textbook_branch_and_tippedisk_no_orbit(tmp_path, capsys, inverted_b
     assert main(["plot", str(out)]) == 0
 
 
+def test_cli_textbook_hopf_branch_starts_along_the_hopf_tangent_as_auto07p(tmp_path, capsys):
+    """'ab' from its Hopf point (D = 0.13090004) to the homoclinic limit AUTO-07p finds, D = 0.10550707."""
+    from tippedisk_analysis.cli import main
+
+    out = tmp_path / "ab.nc"
+    assert main(["periodic-orbits", "--system", "ab", "--to", "0.1", "--period-max", "50", "--max-points", "400",
+                 "-o", str(out)]) == 0
+    ds = td.load(out)
+    assert ds.attrs["labels"] == "HC1" and "homoclinic orbit at D ~ 0.10550707" in capsys.readouterr().out
+    assert float(ds.D[0]) == pytest.approx(0.13090004482, abs=1e-4) and float(ds.period[0]) == pytest.approx(
+        1.5677491465, rel=1e-3)  # the first orbit is next to the Hopf point, with its period 2 pi / omega
+    assert np.all(ds.stability.values == 0)
+
+
 @pytest.mark.parametrize("args, fragment", [
     ([], "exactly one of"),
     (["--system", "bautin", "--from-run", "x.nc"], "exactly one of"),

@@ -11,9 +11,11 @@ import functools
 import heyoka as hy
 import numpy as np
 
-from .analysis import outcome_map as om
+from .analysis import outcome_config
+from .analysis import outcome_rules as rules
 from .analysis import reduced
 from .models import ode
+from .parameters import InitialState, Setup
 
 
 def finite_difference_jacobian(state, pars, h: float = 1e-6) -> np.ndarray:
@@ -32,36 +34,36 @@ class _FirstCrossing:
     """nt_event callback: the time of the first crossing."""
 
     def __init__(self):
-        self.first = om.FILL_TIME
+        self.first = outcome_config.FILL_TIME
 
     def __call__(self, ta, time, d_sign):
-        if self.first == om.FILL_TIME:
+        if self.first == outcome_config.FILL_TIME:
             self.first = time
 
 
 @functools.lru_cache(maxsize=4)
 def _scalar_integrator(tol: float):
     """Scalar heyoka integrator of the outcome map's augmented system (the batch kernel's twin)."""
-    model, variables, sys, fall, outputs, gamma, lambda_N = om._augmented_system()
-    x0 = np.append(ode.initial_state_vector(model, om.Setup(), om.InitialState()), [0.0, 0.0])
+    model, variables, sys, fall, outputs, gamma, lambda_N = rules._augmented_system()
+    x0 = np.append(ode.initial_state_vector(model, Setup(), InitialState()), [0.0, 0.0])
     pos, neg = hy.event_direction.positive, hy.event_direction.negative
     return hy.taylor_adaptive(sys, x0, pars=ode.parameter_vector(), tol=tol, t_events=[hy.t_event(fall, direction=neg)],
                               nt_events=[hy.nt_event(gamma, _FirstCrossing(), direction=pos),
                                          hy.nt_event(lambda_N, _FirstCrossing(), direction=neg)])
 
 
-def outcome_chunk_scalar(config: om.MapConfig | dict, start: int, stop: int) -> dict:
+def outcome_chunk_scalar(config: outcome_config.MapConfig | dict, start: int, stop: int) -> dict:
     """The same as :func:`.outcome_map.run_chunk`, one run at a time with a scalar integrator."""
     if isinstance(config, dict):
-        config = om.MapConfig.from_dict(config)
-    x0, pars = om._prepare(config, start, stop)
+        config = outcome_config.MapConfig.from_dict(config)
+    x0, pars = outcome_config.prepare(config, start, stop)
     n = stop - start
     n_state = x0.shape[0] - 2
     i_gamma = ode.EULER.state_names.index("gamma")
     raw = {"final_state": np.empty_like(x0), "t_final": np.empty(n), "t_window": np.zeros(n),
            "q_window": np.zeros((2, n)), "gamma_window": x0[i_gamma].copy(), "fell": np.zeros(n, bool),
-           "failed": np.zeros(n, bool), "inversion_time": np.full(n, om.FILL_TIME),
-           "lift_off_time": np.full(n, om.FILL_TIME)}
+           "failed": np.zeros(n, bool), "inversion_time": np.full(n, outcome_config.FILL_TIME),
+           "lift_off_time": np.full(n, outcome_config.FILL_TIME)}
     t_w = config.t_end - config.window
     ta = copy.copy(_scalar_integrator(float(config.tol)))
     for i in range(n):
@@ -70,11 +72,11 @@ def outcome_chunk_scalar(config: om.MapConfig | dict, start: int, stop: int) -> 
         ta.pars[:] = pars[:, i]
         ta.reset_cooldowns()
         inversion, lift_off = (event.callback for event in ta.nt_events)
-        inversion.first = lift_off.first = om.FILL_TIME
+        inversion.first = lift_off.first = outcome_config.FILL_TIME
         for t_target in ((t_w,) if t_w > 0 else ()) + (config.t_end,):
-            oc = ta.propagate_until(t_target)[0]
-            if oc != hy.taylor_outcome.time_limit:
-                raw["fell" if int(oc) == -1 else "failed"][i] = True
+            outcome = ta.propagate_until(t_target)[0]
+            if outcome != hy.taylor_outcome.time_limit:
+                raw["fell" if int(outcome) == -1 else "failed"][i] = True
                 break
             if t_target == t_w:
                 raw["q_window"][:, i] = ta.state[n_state:]
@@ -84,4 +86,4 @@ def outcome_chunk_scalar(config: om.MapConfig | dict, start: int, stop: int) -> 
         raw["t_final"][i] = ta.time
         raw["inversion_time"][i] = inversion.first
         raw["lift_off_time"][i] = lift_off.first
-    return om._finish(config, om.kernel(float(config.tol), int(config.batch_size)), raw, pars)
+    return rules._finish(config, rules.kernel(float(config.tol), int(config.batch_size)), raw, pars)

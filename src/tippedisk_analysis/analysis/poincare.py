@@ -30,6 +30,7 @@ import numpy as np
 import xarray as xr
 
 from ..compilation import compiling
+from ..dynamics.poincare import Recorder as _Recorder
 from ..errors import ParameterError
 from ..defaults import FALL_ANGLE, SLIP_SMOOTHING, TAYLOR_TOL
 from ..models import ode
@@ -109,36 +110,6 @@ def _quantity_expression(model: ode.OdeModel, variables, outputs, name: str):
     if name in model.state_names:
         return variables[model.state_names.index(name)]
     return outputs[ode.OUTPUT_NAMES.index(name)]
-
-
-class _Recorder:
-    """nt_event callback: the dense state at each accepted crossing.
-
-    heyoka calls it at the end of the step that holds the crossing; the state at the
-    crossing time comes from the step's Taylor polynomials (dense output).
-    """
-
-    def __init__(self):
-        self.t_transient = 0.0
-        self.level = 0.0
-        self.modulo = False
-        self.q_index = None  # state index of the quantity, or None -> q_func
-        self.q_func = None
-        self.pars = None
-        self.times: list[float] = []
-        self.states: list[np.ndarray] = []
-
-    def __call__(self, ta, time, d_sign):
-        if time < self.t_transient:
-            return
-        ta.update_d_output(time)
-        state = np.array(ta.d_output, copy=True)
-        if self.modulo:
-            q = state[self.q_index] if self.q_index is not None else float(self.q_func(state, pars=self.pars)[0])
-            if math.cos(q - self.level) <= 0.0:
-                return
-        self.times.append(float(time))
-        self.states.append(state)
 
 
 class _LiftOff:

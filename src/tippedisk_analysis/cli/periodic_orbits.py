@@ -44,7 +44,8 @@ def _arguments(p) -> None:
                                                                 "--frictionless: 1e-3); --radius is the disk's rim")
     book.add_argument("--period-max", type=finite_float, help="stop the branch at this period (homoclinic approach)")
     book.add_argument("--segments", type=positive_int, help="shooting segments (default 1, or the dataset's)")
-    book.add_argument("--phase", default="poincare", choices=("poincare", "integral"), help="phase condition")
+    book.add_argument("--phase", choices=("poincare", "integral"),
+                      help="phase condition (default: integral for a branch from a textbook Hopf point, else poincare)")
     book.add_argument("--max-points", type=positive_int, default=200, help="branch points per direction (200)")
     add_output(p)
     add_disk(p)
@@ -109,7 +110,8 @@ def _frictionless(args, po):
     try:
         omega = float(omega)
     except ValueError:
-        raise ParameterError(f"--frictionless {args.frictionless!r} is not BRANCH:OMEGA; give e.g. inverted:40") from None
+        raise ParameterError(f"--frictionless {args.frictionless!r} is not BRANCH:OMEGA; "
+                             "give e.g. inverted:40") from None
     setup = Setup(disk=disk_from_args(args), friction=Friction(mu=0.0))
     radius = 1e-3 if args.hopf_radius is None else args.hopf_radius
     if not radius > 0:
@@ -130,20 +132,38 @@ def _textbook(args, po):
     radius = 0.05 if args.hopf_radius is None else args.hopf_radius
     if not radius > 0:
         raise ParameterError(f"--hopf-radius {radius:g} must be positive")
+    if "hopf" in tb.start and args.to is not None and args.hopf_radius is None:
+        return _textbook_hopf_branch(args, system, tb)
     if "hopf" in tb.start:
         value, state = tb.start["hopf"]
         orbit, _g = po.orbit_from_hopf(system, tb.parameter, value, state, radius=radius,
-                                       segments=args.segments or 1, phase=args.phase)
+                                       segments=args.segments or 1, phase=args.phase or "poincare")
     else:
         value, state, period = tb.start["orbit"]
         pars = system.with_pars(**{tb.parameter: value})
         if args.system == "roessler":
             state, period = po.simulation_guess(system, state, pars, index=1, level=0.0, transient=200.0)
-        orbit = po.find_orbit(system, state, period, pars, segments=args.segments or 1, phase=args.phase)
+        orbit = po.find_orbit(system, state, period, pars, segments=args.segments or 1,
+                              phase=args.phase or "poincare")
         orbit.value, orbit.parameter = value, tb.parameter
     config = {"source": "textbook", "start": {k: list(map(float, v[1])) for k, v in tb.start.items()},
               "facts": tb.facts}
     return _orbit_or_branch(args, po, orbit, tb.parameter, config)
+
+
+def _textbook_hopf_branch(args, system, tb):
+    """The branch born at a textbook system's Hopf point, started along the Hopf tangent (as AUTO-07p)."""
+    from ..dynamics import continuation
+    from ..dynamics.orbit_branches import hopf_branch
+
+    value, state = tb.start["hopf"]
+    if args.to == value:
+        raise ParameterError(f"--to {args.to:g} equals the Hopf value {tb.parameter} = {value:g}")
+    options = continuation.Options(ds=0.02, ds_max=0.2, max_points=args.max_points)
+    return hopf_branch(system, state, system.with_pars(**{tb.parameter: value}), tb.parameter,
+                       bounds=(min(value, args.to), max(value, args.to)), segments=args.segments or 4,
+                       phase=args.phase or "integral", period_max=args.period_max, options=options,
+                       config={"source": "textbook", "facts": tb.facts, "to": args.to})
 
 
 def _orbit_or_branch(args, po, orbit, parameter: str, config: dict):
@@ -164,6 +184,6 @@ def _orbit_or_branch(args, po, orbit, parameter: str, config: dict):
         raise ParameterError(f"--to {args.to:g} equals the start value of {parameter}")
     bounds = {parameter: (min(start, args.to), max(start, args.to))}
     br, prob = po.continue_orbits(orbit, parameter, bounds=bounds, direction=1 if args.to > start else -1,
-                                  segments=args.segments, phase=args.phase, period_max=args.period_max,
+                                  segments=args.segments, phase=args.phase or "poincare", period_max=args.period_max,
                                   options=continuation.Options(ds=0.02, ds_max=0.1, max_points=args.max_points))
     return po.branch_dataset(prob, br, {**config, "to": args.to})

@@ -137,7 +137,8 @@ class Problem:
     def accept(self, kind: str, point: "Point", value: float, options: "Options") -> bool:
         """Whether a located point is the special point (a Hopf test zero may be a neutral saddle)."""
         if kind == "hopf":
-            return math.isfinite(value) and abs(value) <= max(options.locate_tol, 1e-8 * np.abs(point.eigenvalues).max())
+            scale = np.abs(point.eigenvalues).max()
+            return math.isfinite(value) and abs(value) <= max(options.locate_tol, 1e-8 * scale)
         return True
 
 

@@ -2,8 +2,9 @@
 re-orthonormalisation.
 
 Generic (knows nothing of the disk; its Lyapunov maps are in tippedisk_analysis.analysis.lyapunov). The state
-and k tangent vectors are integrated together by one heyoka Taylor integrator of the first-order variational equations (``hy.var_ode_sys`` with the first k
-states as arguments: its k columns start from the orthonormal vectors we set, and the equations are linear).
+and k tangent vectors are integrated together by one heyoka Taylor integrator of the first-order variational
+equations (``hy.var_ode_sys`` with the first k states as arguments: its k columns start from the orthonormal
+vectors we set, and the equations are linear).
 The tangent vectors start as a fixed generic orthonormal frame (:func:`initial_frame`). Every ``dt`` the
 tangent matrix W is factored W = Q R (signs so that diag R > 0), log R_ii is accumulated and
 W is replaced by Q (Benettin, Galgani, Giorgilli & Strelcyn 1980; Shimada & Nagashima 1979; as

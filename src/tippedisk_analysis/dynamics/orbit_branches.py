@@ -243,6 +243,18 @@ def orbit_branch(system: System, branch: xr.Dataset, label: str, *, bounds, segm
         raise ParameterError(f"{label} lies on a curve in {', '.join(parameters)}; give a branch in one parameter")
     parameter = parameters[0]
     state, pars = point_of(branch, system, index)
+    return hopf_branch(system, state, pars, parameter, bounds=bounds, segments=segments, phase=phase,
+                       period_max=period_max, parameter_scale=parameter_scale, marks=marks, options=options,
+                       n_samples=n_samples, config={"source_label": label}, **option_keywords)
+
+
+def hopf_branch(system: System, state, pars, parameter: str, *, bounds, segments: int = 4,
+                phase: str = "integral", period_max: float | None = None, parameter_scale: float = 1.0,
+                marks=(), options: continuation.Options | None = None, n_samples: int = N_SAMPLES,
+                config: dict | None = None, **option_keywords) -> xr.Dataset:
+    """The branch of periodic orbits born at the Hopf point (``state``, ``pars``) in ``parameter``, as
+    :func:`orbit_branch` (which finds the point on an equilibrium branch); ``config``: more provenance."""
+    pars = system.with_pars(pars)
     low, high = (float(b) for b in bounds)
     if options is not None and option_keywords:
         raise ParameterError("give either options=Options(...) or the option keywords (ds, ds_max, ...), not both")
@@ -252,6 +264,6 @@ def orbit_branch(system: System, branch: xr.Dataset, label: str, *, bounds, segm
                                   parameter_scale=parameter_scale, options=options)
     br = continuation.continue_branch(prob, u, options, tangent=tangent, marks=marks)
     _mark_homoclinic(prob, br)
-    return branch_dataset(prob, br, {"source": "hopf", "source_label": label, "hopf_state": list(map(float, state)),
+    return branch_dataset(prob, br, {"source": "hopf", **(config or {}), "hopf_state": list(map(float, state)),
                                      "hopf_value": float(pars[system.parameter_index(parameter)]),
                                      "system_key": system.key}, n_samples)

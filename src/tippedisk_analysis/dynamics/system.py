@@ -287,22 +287,26 @@ class System:
             return {}
         return dict(zip(self.observables, self.evaluate(cf, states, self.pars if pars is None else pars)))
 
-    def taylor(self, tol: float, *, batch: int = 0, tangents: int = 0, parameters=(), events: bool = False,
-               extra=(), compact_mode: bool | None = None):
+    def taylor(self, tol: float, *, batch: int = 0, tangents: int = 0, parameters=(), events=False,
+               nt_events=(), extra=(), compact_mode: bool | None = None):
         """A Taylor integrator template (copy it before use).
 
         batch: SIMD lanes (0: scalar); tangents: k first-order variations with respect to the first k initial
         states (Lyapunov vectors; ``parameters`` adds variations with respect to those runtime parameters,
-        names or indices, after ``tangents`` = n for shooting); events: the System's terminal events;
-        extra: (variable, rhs) pairs appended to the system (quadratures such as a divergence integral);
-        compact_mode: heyoka's compact mode (default the System's).
+        names or indices, after ``tangents`` = n for shooting); events: the System's terminal events (True:
+        all; or a tuple of their names: those, in that order); nt_events: (expression, callback, direction)
+        non-terminal events (heyoka calls the callback, copied with the integrator); extra: (variable, rhs)
+        pairs appended to the system (quadratures such as a divergence integral); compact_mode: heyoka's
+        compact mode (default the System's).
         The state holds x, then the variations (heyoka's var_ode_sys layout), then ``extra``; the integrator's
         ``pars`` hold the first ``len(ta.pars)`` runtime parameters (those up to the last one its equations use).
         """
         indices = tuple(i if isinstance(i, int) else self.parameter_index(i) for i in parameters)
-        extra = tuple(extra)
+        extra, nt_events = tuple(extra), tuple(nt_events)
+        t_events = self._events(events)
         compact = self.compact_mode if compact_mode is None else bool(compact_mode)
-        key = ("taylor", float(tol), int(batch), int(tangents), indices, bool(events), tuple(map(str, extra)), compact)
+        key = ("taylor", float(tol), int(batch), int(tangents), indices, tuple(e.name for e in t_events),
+               tuple((str(x), type(c).__name__, d) for x, c, d in nt_events), tuple(map(str, extra)), compact)
 
         def build():
             sys = list(zip(self.variables, self.rhs))
@@ -314,21 +318,34 @@ class System:
             else:
                 sys = equations = sys + list(extra)
             size = len(equations)
-            t_events = [e for e in self.events] if events else []
-            used = parameter_indices([f for _v, f in equations] + [e.expression for e in t_events])
+            used = parameter_indices([f for _v, f in equations] + [e.expression for e in t_events]
+                                     + [x for x, _c, _d in nt_events])
             n_par = max(used) + 1 if used else 0  # heyoka wants exactly the parameters the equations use
             kwargs = {"tol": float(tol), "compact_mode": compact}
-            if batch:
-                if t_events:
-                    kwargs["t_events"] = [hy.t_event_batch(e.expression, direction=DIRECTIONS[e.direction])
-                                          for e in t_events]
-                return hy.taylor_adaptive_batch(sys, np.zeros((size, batch)), pars=np.zeros((n_par, batch)), **kwargs)
+            t_make = hy.t_event_batch if batch else hy.t_event
+            nt_make = hy.nt_event_batch if batch else hy.nt_event
             if t_events:
-                kwargs["t_events"] = [hy.t_event(e.expression, direction=DIRECTIONS[e.direction]) for e in t_events]
+                kwargs["t_events"] = [t_make(e.expression, direction=DIRECTIONS[e.direction]) for e in t_events]
+            if nt_events:
+                kwargs["nt_events"] = [nt_make(x, c, direction=DIRECTIONS[d]) for x, c, d in nt_events]
+            if batch:
+                return hy.taylor_adaptive_batch(sys, np.zeros((size, batch)), pars=np.zeros((n_par, batch)), **kwargs)
             return hy.taylor_adaptive(sys, np.zeros(size), pars=np.zeros(n_par), **kwargs)
 
         what = "the " + ("batch " if batch else "") + ("variational " if tangents or indices else "") + "integrator"
         return self._cached(key, what, build)
+
+    def _events(self, events) -> tuple:
+        """The terminal events an integrator gets: True (all), False (none) or their names in order."""
+        if events is True:
+            return self.events
+        if not events:
+            return ()
+        by_name = {e.name: e for e in self.events}
+        unknown = [n for n in events if n not in by_name]
+        if unknown:
+            raise ParameterError(f"{self.name} has no event {unknown[0]!r}; it has {', '.join(by_name) or 'none'}")
+        return tuple(by_name[n] for n in events)
 
     def __repr__(self) -> str:
         return (f"System({self.name!r}: {self.n} states {', '.join(self.state_names)}; parameters "

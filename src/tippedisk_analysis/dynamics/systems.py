@@ -109,6 +109,23 @@ def _duffing() -> System:
                   description="conservative Duffing oscillator: a family of orbits in the energy")
 
 
+def _double_well() -> System:
+    """The damped double-well oscillator x'' + delta x' - x + x^3 = 0: stable foci at (x, v) = (+-1, 0), a saddle
+    at 0; the symmetry (x, v) -> (-x, -v) swaps the two basins."""
+    x, v = hy.make_vars("x", "v")
+    return System("double_well", (x, v), (v, -hy.par[0] * v + x - x * x * x), {"delta": 0.3},
+                  description="damped double-well oscillator: two symmetric basins")
+
+
+def _ab() -> System:
+    """AUTO-07p's demo 'ab' (an exothermic reaction): u1' = -u1 + D (1 - u1) exp(u2),
+    u2' = -u2 + D B (1 - u1) exp(u2) - beta u2."""
+    u1, u2 = hy.make_vars("u1", "u2")
+    D, B, beta = hy.par[0], hy.par[1], hy.par[2]
+    return System("ab", (u1, u2), (-u1 + D * (1 - u1) * hy.exp(u2), -u2 + D * B * (1 - u1) * hy.exp(u2) - beta * u2),
+                  {"D": 0.0, "B": 14.0, "beta": 2.0}, description="AUTO-07p demo ab")
+
+
 def _lorenz() -> System:
     x, y, z = hy.make_vars("x", "y", "z")
     s, r, b = hy.par[0], hy.par[1], hy.par[2]
@@ -132,6 +149,11 @@ TEXTBOOK = {
                            "Hopf at c = -1/6, homoclinic loop at c = 0 (saddle eigenvalues +-1)"),
     "duffing": Textbook(_duffing, "E", {"orbit": (0.5, (1.0, 0.0), 5.0)},
                         "conservative: orbits in a family parametrised by the energy E (a level of a first integral)"),
+    "double_well": Textbook(_double_well, "delta", {},
+                            "delta > 0: stable foci (+-1, 0), basins swapped by (x, v) -> -(x, v)"),
+    "ab": Textbook(_ab, "D", {"hopf": (0.13090004482004158, (0.8950806338678032, 4.177042958049749))},
+                   "B = 14, beta = 2: folds D = 0.10573898, 0.08893185; Hopf D = 0.13090004 (exact algebra); orbits "
+                   "to a homoclinic limit D = 0.10550707 (AUTO-07p)"),
     "lorenz": Textbook(_lorenz, "rho", {}, "sigma 10, rho 28, beta 8/3: Lyapunov exponents 0.9056, 0, -14.5723"),
 }
 

@@ -70,8 +70,8 @@ class Field:
             for perm in set(itertools.permutations(arguments)):
                 positions.append(np.ravel_multi_index((multi[0], *perm), shape))
                 source.append(i)
-        return _Tensor(hy.cfunc([expr for _m, expr in entries], self.variables), shape, np.array(positions, dtype=np.int64),
-                       np.array(source, dtype=np.int64))
+        function = hy.cfunc([expr for _m, expr in entries], self.variables)
+        return _Tensor(function, shape, np.array(positions, dtype=np.int64), np.array(source, dtype=np.int64))
 
     def tensor(self, x, pars, order: int, with_parameters: bool = True) -> np.ndarray:
         """Derivative tensor of ``order`` (1, 2, 3) at one point, shape (n_out, n, ..., n), n = n_state

@@ -35,6 +35,7 @@ slope at zero slip stays exactly I/eps.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -43,6 +44,7 @@ import numpy as np
 
 from .. import kinematics as kin
 from ..defaults import FALL_ANGLE, SLIP_SMOOTHING
+from ..dynamics import Event, System
 from ..parameters import InitialState, Setup
 from .variables import ORIENTATIONS, OUTPUT_NAMES, PARAMETER_NAMES, state_names  # noqa: F401 (ode.OUTPUT_NAMES)
 
@@ -254,6 +256,19 @@ def system(model: OdeModel, slip_norm=None):
 
 
 MODELS = {m.name: m for m in (EULER, QUATERNION)}
+
+
+@functools.lru_cache(maxsize=None)
+def as_system(model: OdeModel) -> System:
+    """``model`` as a :class:`~tippedisk_analysis.dynamics.System`: its state, the runtime parameters of
+    PARAMETER_NAMES (default Tables 1-2, Sect. 6), the outputs that are not states as observables, and the
+    terminal events ``fell`` (the tilt reaches fall_angle) and ``lift_off`` (lambda_N falls through 0)."""
+    variables, sys, fall, outputs = system(model)
+    observables = {name: out for name, out in zip(OUTPUT_NAMES, outputs) if name not in model.state_names}
+    events = (Event("fell", fall), Event("lift_off", observables["lambda_N"]))
+    return System(model.name, variables, [rhs for _v, rhs in sys], dict(zip(PARAMETER_NAMES, parameter_vector())),
+                  state_names=model.state_names, observables=observables, events=events,
+                  description=f"{model.paper_name}: bilateral contact at C1, smooth Coulomb friction (2.29)")
 
 
 def parameter_vector(setup: Setup | None = None, fall_angle: float = FALL_ANGLE,

@@ -13,9 +13,14 @@ from .registry import figure
 
 @figure("poincare")
 def poincare_figure(ds: xr.Dataset):
-    """Crossings of a Poincaré section: (gamma, gamma_dot) and (beta, gamma), coloured by time."""
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4.5), constrained_layout=True)
-    for ax, (x, y) in zip(axes, (("gamma", "gamma_dot"), ("beta", "gamma"))):
+    """Crossings of a Poincaré section: (gamma, gamma_dot) and (beta, gamma), coloured by time; a generic
+    System's: its first states in pairs."""
+    names = str(ds.attrs.get("state_names", "")).split()
+    pairs = (("gamma", "gamma_dot"), ("beta", "gamma")) if "system" not in ds.attrs else \
+        tuple(zip(names, names[1:] + names[:1]))[: max(1, min(2, len(names) - 1))]
+    fig, axes = plt.subplots(1, len(pairs), figsize=(5 * len(pairs), 4.5), constrained_layout=True, squeeze=False)
+    axes = axes[0]
+    for ax, (x, y) in zip(axes, pairs):
         sc = ax.scatter(ds[x], ds[y], c=ds["time"], s=8, cmap="viridis")
         ax.set(xlabel=axis_label(x, ds[x].attrs.get("units", "")), ylabel=axis_label(y, ds[y].attrs.get("units", "")))
     fig.colorbar(sc, ax=axes, label=axis_label("time", "s"))

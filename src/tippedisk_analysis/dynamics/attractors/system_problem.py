@@ -1,0 +1,203 @@
+"""The recurrence problem of any :class:`~tippedisk_analysis.dynamics.System`, and its basins of attraction.
+
+    grid = at.Grid(("u1", "u2"), (0.0, 0.0), (1.0, 6.0), (100, 100))
+    ds = dy.basins(ab, {"u1": (0.0, 1.0, 64), "u2": (0.0, 6.0, 64)}, grid=grid, pars=ab.with_pars(D=0.12))
+
+The runs integrate the system in heyoka batch mode (its terminal events end a run and label it), observed
+through the grid's coordinates (states or observables of the system, by name). The result is a dataset of
+kind ``basins``: the attractor id (>= 0) or the negative label of every initial condition, the time it was
+decided, the basin fractions, and the table of attractors (kind, period, amplitude, a state on it, the mean of
+its observed coordinates), with the system's name and equations as attributes. The grid of initial
+conditions runs as a resumable sweep (:mod:`tippedisk_analysis.dynamics.sweeps`: threads, or a dask
+scheduler; finished chunks are kept next to ``output``).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import numpy as np
+import xarray as xr
+
+from ...errors import ParameterError
+from ...results import make_attrs
+from .. import sweeps
+from ..datasets import flag_attrs
+from ..system import System
+from .mapping import map_points
+from .problem import Problem, describe, equilibrium_description
+from .records import BASE_KINDS, Candidate, Description, Grid, RecurrenceSettings
+from .tables import assemble_table, chunk_result, column_names
+
+TOL = 1e-10  # Taylor tolerance of the runs: classifications, not trajectories to round-off
+NEWTON_STEPS = 30  # Newton iterations towards the equilibrium of a contracting spiral
+
+
+class SystemProblem(Problem):
+    """A :class:`~tippedisk_analysis.dynamics.System` for the recurrence core: integrated in batch mode with
+    its terminal events (their names label the runs they end), observed through ``grid``'s coordinates."""
+
+    def __init__(self, system: System, grid: Grid, *, tol: float = TOL, events=True):
+        self.system, self.grid, self.tol = system, grid, float(tol)
+        self.state_names = system.state_names
+        self._events = tuple(e.name for e in system._events(events))
+        self.terminal_labels = self._events
+        self.kinds = BASE_KINDS
+        for name in grid.names:
+            if name not in system.state_names and name not in system.observables:
+                raise ParameterError(f"grid coordinate {name!r} is neither a state nor an observable of "
+                                     f"{system.name} ({', '.join((*system.state_names, *system.observables))})")
+
+    def describe(self, candidate: Candidate, core) -> Description | None:
+        """The generic description (:func:`.problem.describe`), and a slowly contracting spiral recognised as
+        its equilibrium: where the window is too short for the spreads to show the decay, Newton's method from
+        the samples' mean finds an equilibrium x*; it is the attractor if it is linearly stable and the
+        samples approach it in the Lyapunov function V = (x - x*)^T P (x - x*) of its linearisation
+        (A^T P + P A = -I): V at the end below half its value at the start, and below it over each half."""
+        desc = describe(self, candidate, core)
+        if desc is None or desc.kind == "equilibrium":
+            return desc
+        x = self._contracting_equilibrium(candidate)
+        return desc if x is None else equilibrium_description(self, candidate, {"state": x})
+
+    def _contracting_equilibrium(self, candidate: Candidate) -> np.ndarray | None:
+        from scipy.linalg import solve_continuous_lyapunov
+
+        x = np.mean(candidate.states, axis=1)
+        pars = np.asarray(candidate.pars, dtype=float)
+        for _ in range(NEWTON_STEPS):
+            try:
+                step = np.linalg.solve(self.system.jacobian(x, pars), -self.system.f(x, pars))
+            except np.linalg.LinAlgError:
+                return None
+            x = x + step
+            if not np.all(np.isfinite(x)):
+                return None
+            if np.max(np.abs(step)) <= 1e-13 * (1.0 + np.max(np.abs(x))):
+                break
+        else:
+            return None
+        A = self.system.jacobian(x, pars)
+        if np.max(np.linalg.eigvals(A).real) >= 0:
+            return None
+        P = solve_continuous_lyapunov(A.T, -np.eye(self.system.n))
+        d = candidate.states - x[:, None]
+        V = np.einsum("il,ij,jl->l", d, P, d)
+        h = len(V) // 2
+        return x if V[-1] < 0.5 * V[0] and V[h:].max() < V[:h].max() else None
+
+    def integrator(self, batch_size: int):
+        return self.system.taylor(self.tol, batch=int(batch_size), events=self._events)
+
+    def observe(self, states, pars):
+        states = np.asarray(states, dtype=float).reshape(self.system.n, -1)
+        observed = self.system.observe(states, pars) if any(n in self.system.observables for n in self.grid.names) \
+            else {}
+        return np.array([states[self.system.state_index(n)] if n in self.system.state_names else observed[n]
+                         for n in self.grid.names])
+
+
+@functools.lru_cache(maxsize=8)
+def _problem(system: System, grid: Grid, tol: float) -> SystemProblem:
+    return SystemProblem(system, grid, tol=tol)
+
+
+def _initial_states(system: System, state, axes: dict, start: int, stop: int) -> np.ndarray:
+    values = {name: np.linspace(*axis) for name, axis in axes.items()}
+    shape = tuple(int(a[2]) for a in axes.values())
+    idx = np.unravel_index(np.arange(start, stop), shape)
+    x0 = np.repeat(np.asarray(state, dtype=float)[:, None], stop - start, axis=1)
+    for (name, v), i in zip(values.items(), idx):
+        x0[system.state_index(name)] = v[i]
+    return x0
+
+
+def basin_chunk(system: System, config: dict, start: int, stop: int) -> dict:
+    """Points [start, stop) of a basin map of ``system`` (module-level: a dask worker runs it)."""
+    grid = Grid.from_dict(config["grid"])
+    prob = _problem(system, grid, float(config["tol"]))
+    x0 = _initial_states(system, config["state"], config["axes"], start, stop)
+    res = map_points(prob, RecurrenceSettings(**config["recurrence"]), x0, np.asarray(config["pars"]),
+                     np.zeros(stop - start, dtype=np.int64), int(config["batch_size"]))
+    out = chunk_result(prob, res, start)
+    out.update({f"final_{n}": res.final_states[i] for i, n in enumerate(system.state_names)})
+    return {k: np.where(np.isfinite(v), v, 0.0) if v.dtype.kind == "f" else v for k, v in out.items()}
+
+
+def _assemble(system: System, config: dict, results: dict) -> xr.Dataset:
+    grid = Grid.from_dict(config["grid"])
+    prob = SystemProblem(system, grid, tol=float(config["tol"]))
+    n = int(np.prod([a[2] for a in config["axes"].values()]))
+    outcome, table, _first = assemble_table(prob, results, np.zeros(n, dtype=np.int64), 1.0)
+    axes = config["axes"]
+    dims = tuple(axes)
+    shape = tuple(int(a[2]) for a in axes.values())
+    labels = prob.labels()
+    flag_values = np.array(sorted(labels.values()) + list(range(len(table))), dtype=np.int16)
+    flag_meanings = " ".join([k for k, _ in sorted(labels.items(), key=lambda kv: kv[1])]
+                             + [f"A{i}_{d.kind}" for i, d in enumerate(table)])
+    data = {
+        "outcome": (dims, outcome.reshape(shape).astype(np.int16), {
+            "units": "1", "long_name": "attractor id (>= 0, see dimension attractor) or negative label",
+            "flag_values": flag_values, "flag_meanings": flag_meanings}),
+        "assignment_time": (dims, np.asarray(results["t_assign"]).reshape(shape), {
+            "units": "1", "long_name": "time at which the run was assigned to an attractor or labelled"}),
+        "basin_fraction": ("attractor", np.array([np.mean(outcome == i) for i in range(len(table))]),
+                           {"units": "1", "long_name": "share of the initial conditions in the basin"}),
+        "attractor_kind": ("attractor", np.array([BASE_KINDS.index(d.kind) for d in table], dtype=np.int8),
+                           flag_attrs("kind of attractor", {k: i for i, k in enumerate(BASE_KINDS)})),
+        "attractor_period": ("attractor", np.array([d.period for d in table], dtype=float),
+                             {"units": "1", "long_name": "period (periodic attractors; fill -1: none)"}),
+        "attractor_amplitude": ("attractor", np.array([d.amplitude for d in table], dtype=float),
+                                {"units": "1", "long_name": "half peak-to-peak of the first observed coordinate"}),
+        "attractor_state": (("attractor", "state"), np.array([d.representative for d in table], dtype=float)
+                            .reshape(len(table), system.n), {"units": "1", "long_name": "a state on the attractor "
+                                                             "(equilibria: the settled state)"}),
+        "attractor_centroid": (("attractor", "observed"), np.array([d.centroid for d in table], dtype=float)
+                               .reshape(len(table), len(grid.names)),
+                               {"units": "1", "long_name": "mean of the observed coordinates on the attractor"}),
+    }
+    coords = {name: (name, np.linspace(*axis), {"units": system.units.get(name, "1"),
+                                                "long_name": f"initial {name}"}) for name, axis in axes.items()}
+    coords.update({"attractor": ("attractor", np.arange(len(table), dtype=np.int32), {"long_name": "attractor id"}),
+                   "state": ("state", list(system.state_names), {"long_name": "state variable"}),
+                   "observed": ("observed", list(grid.names), {"long_name": "observed coordinate of the cell grid"})})
+    counts = ", ".join(f"{int(np.sum(outcome == v))} {k}" for k, v in labels.items())
+    message = (f"{system.name}: {n} runs, {len(table)} attractor(s) (" + ", ".join(
+        f"A{i} {d.kind} {np.mean(outcome == i):.3g}" for i, d in enumerate(table)) + f"); {counts}")
+    undecided = int(np.sum(outcome == labels["undecided"]))
+    status = "partial" if np.any(outcome == labels["failed"]) else "completed"
+    attrs = make_attrs("basins", config, status, message, **system.attrs(np.asarray(config["pars"])),
+                       swept=" ".join(dims), undecided=undecided)
+    return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+def basins(system: System, axes: dict, *, grid: Grid, state=None, pars=None, horizon: float = 100.0,
+           recurrence: dict | None = None, tol: float = TOL, batch_size: int = 4, chunk_size: int = 256,
+           output=None, threads: int | None = None, scheduler=None, progress: bool = True) -> xr.Dataset:
+    """Basins of attraction of ``system`` over one or two initial states ``axes`` ({state name: (start, stop,
+    n)}), the other states at ``state`` (default zeros), parameters ``pars`` (default the system's), found by
+    recurrences in ``grid`` (a :class:`~tippedisk_analysis.dynamics.attractors.Grid` over states or
+    observables); ``horizon``: the longest run (undecided after it); ``recurrence``: fields of
+    :class:`~tippedisk_analysis.dynamics.attractors.RecurrenceSettings`."""
+    if not 1 <= len(axes) <= 2:
+        raise ParameterError("basins need one or two initial-state ranges, e.g. {'u1': (0, 1, 64)}")
+    axes = {name: [float(a), float(b), int(n)] for name, (a, b, n) in axes.items()}
+    for name, (a, b, n) in axes.items():
+        system.state_index(name)
+        if not (math.isfinite(a) and math.isfinite(b) and a < b and n >= 2):
+            raise ParameterError(f"range of {name} = ({a:g}, {b:g}, {n}): give start < stop and n >= 2")
+    state = np.zeros(system.n) if state is None else np.asarray(state, dtype=float)
+    settings = RecurrenceSettings(**{**(recurrence or {}), "horizon": float(horizon)})
+    config = {"system": system.name, "system_key": system.key, "axes": axes, "state": list(map(float, state)),
+              "pars": list(map(float, system.with_pars(pars))), "grid": grid.to_dict(), "tol": float(tol),
+              "batch_size": int(batch_size), "recurrence": settings.to_dict()}
+    variables = ("att_key", "t_assign", "attractor_distance", *column_names(SystemProblem(system, grid, tol=tol)),
+                 *(f"final_{n}" for n in system.state_names))
+    n_points = int(np.prod([a[2] for a in axes.values()]))
+    sweep = sweeps.Sweep(f"basins of {system.name}", config, n_points, int(chunk_size), variables,
+                         functools.partial(basin_chunk, system), functools.partial(_assemble, system, config),
+                         functools.partial(_problem(system, grid, float(tol)).integrator, int(batch_size)),
+                         bytes_per_point=8.0 * (len(variables) + 4), seconds_per_point=1e-4 * horizon)
+    return sweeps.run_sweep(sweep, output=output, threads=threads, scheduler=scheduler, progress=progress)
