@@ -50,7 +50,7 @@ def main() -> None:
 
     from tippedisk_analysis.analysis import basins as bs
     from tippedisk_analysis.analysis import outcome_map as om
-    from tippedisk_analysis.analysis import sweeps
+    from tippedisk_analysis.dynamics import sweeps
 
     rows = []
 

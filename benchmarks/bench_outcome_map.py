@@ -34,7 +34,7 @@ def main() -> None:
     import heyoka as hy
 
     from tippedisk_analysis.analysis import outcome_map as om
-    from tippedisk_analysis.analysis import sweeps
+    from tippedisk_analysis.dynamics import sweeps
     from tippedisk_analysis.testing import outcome_chunk_scalar
 
     cfg = om.MapConfig(ranges={"omega": (5.0, 80.0, args.n), "eps": (0.01, 0.3, args.n)}, t_end=args.t_end)

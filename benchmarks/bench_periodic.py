@@ -27,9 +27,10 @@ def main() -> None:
     args = ap.parse_args()
     if args.quick:
         args.n, args.repeat = 4, 1
-    from tippedisk_analysis.analysis import continuation as co
+    from tippedisk_analysis.dynamics import continuation as co
     from tippedisk_analysis.analysis import lyapunov as ly
-    from tippedisk_analysis.analysis import periodic as po
+    from tippedisk_analysis import dynamics as dy
+    from tippedisk_analysis.analysis import orbits
 
     def best(fn, repeat=args.repeat):
         times = []
@@ -39,19 +40,19 @@ def main() -> None:
             times.append(time.perf_counter() - t)
         return min(times), out
 
-    system = po.textbook_system("vanderpol")
+    system = dy.textbook_system("vanderpol")
     t0 = time.perf_counter()
-    po.find_orbit(system, [2.0, 0.0], 6.66)
+    dy.find_orbit(system, [2.0, 0.0], 6.66)
     print(f"compile (or load) the van der Pol integrators: {time.perf_counter() - t0:.2f} s")
-    t, orbit = best(lambda: po.find_orbit(system, [2.0, 0.1], 6.7))
+    t, orbit = best(lambda: dy.find_orbit(system, [2.0, 0.1], 6.7))
     print(f"one orbit with multipliers (van der Pol, {orbit.iterations} Newton steps): {t * 1e3:.1f} ms warm "
           f"[target 50 ms]; T = {orbit.period:.13g}")
 
-    roessler = po.textbook_system("roessler")
-    start = po.find_orbit(roessler, [4.58086947, 0.0, 1.52654668], 5.749)
+    roessler = dy.textbook_system("roessler")
+    start = dy.find_orbit(roessler, [4.58086947, 0.0, 1.52654668], 5.749)
     options = co.Options(ds=0.01, ds_max=0.02, max_points=100)
-    po.continue_orbits(start, "c", bounds={"c": (2.5, 6.0)}, options=co.Options(max_points=3))  # compile
-    t, (br, _prob) = best(lambda: po.continue_orbits(start, "c", bounds={"c": (2.5, 6.0)}, options=options),
+    dy.continue_orbits(start, "c", bounds={"c": (2.5, 6.0)}, options=co.Options(max_points=3))  # compile
+    t, (br, _prob) = best(lambda: dy.continue_orbits(start, "c", bounds={"c": (2.5, 6.0)}, options=options),
                           repeat=max(1, args.repeat // 2))
     print(f"branch of {len(br.points)} periodic orbits (Roessler, c from 2.5 to {br.points[-1].u[-1]:.4g}, "
           f"{' '.join(sp.label for sp in br.special_points)}): {t:.2f} s [target 30 s]")
@@ -59,10 +60,10 @@ def main() -> None:
     import tippedisk_analysis as td
 
     frictionless = td.Setup(friction=td.Friction(mu=0.0))
-    po.tippedisk_lyapunov_family(frictionless, "inverted", 40.0, 0.402, options=co.Options(max_points=2))  # compile
+    orbits.tippedisk_lyapunov_family(frictionless, "inverted", 40.0, 0.402, options=co.Options(max_points=2))  # compile
     t0 = time.perf_counter()
-    br, _prob = po.tippedisk_lyapunov_family(frictionless, "inverted", 40.0, 0.6,
-                                             options=co.Options(ds=0.02, ds_max=0.1, max_points=100))
+    br, _prob = orbits.tippedisk_lyapunov_family(frictionless, "inverted", 40.0, 0.6,
+                                                 options=co.Options(ds=0.02, ds_max=0.1, max_points=100))
     print(f"branch of {len(br.points)} periodic orbits of the frictionless tippedisk (7 states, E_tot "
           f"{br.points[0].u[-1]:.4f} -> {br.points[-1].u[-1]:.4f} J): {time.perf_counter() - t0:.2f} s [target 30 s]")
 

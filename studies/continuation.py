@@ -15,7 +15,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import tippedisk_analysis as td
-from tippedisk_analysis.analysis import maps, normal_forms, reduced
+from tippedisk_analysis.analysis import maps, reduced
+from tippedisk_analysis.dynamics import normal_forms
 from tippedisk_analysis.analysis import spin_continuation as sc
 from tippedisk_analysis.models import ode
 from tippedisk_analysis.plotting import plot_dataset

@@ -17,8 +17,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import tippedisk_analysis as td
-from tippedisk_analysis.analysis import continuation as co
-from tippedisk_analysis.analysis import periodic as po
+from tippedisk_analysis.dynamics import continuation as co
+from tippedisk_analysis import dynamics as dy
+from tippedisk_analysis.analysis import orbits
 from tippedisk_analysis.analysis import spin_continuation as sc
 from tippedisk_analysis.plotting import plot_dataset
 
@@ -27,44 +28,45 @@ def main(output_dir: str = "output", quick: bool = False) -> Path:
     out = Path(output_dir)
     out.mkdir(parents=True, exist_ok=True)
     # ---- textbook: a fold of cycles and a period doubling
-    bautin = po.textbook_system("bautin")
-    orbit, _g = po.orbit_from_hopf(bautin, "beta", 0.0, [0.0, 0.0], radius=0.05)
-    br, prob = po.continue_orbits(orbit, "beta", bounds={"beta": (-0.3, 0.2)}, direction=-1)
-    bautin_ds = po.branch_dataset(prob, br, {"source": "hopf"})
+    bautin = dy.textbook_system("bautin")
+    orbit, _g = dy.orbit_from_hopf(bautin, "beta", 0.0, [0.0, 0.0], radius=0.05)
+    br, prob = dy.continue_orbits(orbit, "beta", bounds={"beta": (-0.3, 0.2)}, direction=-1)
+    bautin_ds = dy.branch_dataset(prob, br, {"source": "hopf"})
     _store(bautin_ds, out / "periodic_bautin.nc")
-    roessler = po.textbook_system("roessler")
-    x0, T0 = po.simulation_guess(roessler, [1.0, 1.0, 0.0], index=1, level=0.0, transient=200.0)
-    start = po.find_orbit(roessler, x0, T0)
-    br, prob = po.continue_orbits(start, "c", bounds={"c": (2.5, 4.0 if quick else 4.5)})
-    roessler_ds = po.branch_dataset(prob, br, {"source": "simulation"})
+    roessler = dy.textbook_system("roessler")
+    x0, T0 = dy.simulation_guess(roessler, [1.0, 1.0, 0.0], index=1, level=0.0, transient=200.0)
+    start = dy.find_orbit(roessler, x0, T0)
+    br, prob = dy.continue_orbits(start, "c", bounds={"c": (2.5, 4.0 if quick else 4.5)})
+    roessler_ds = dy.branch_dataset(prob, br, {"source": "simulation"})
     _store(roessler_ds, out / "periodic_roessler.nc")
-    doubled, dprob = po.switch_period_doubling(prob, br, "PD1", options=co.Options(ds=0.02, ds_max=0.2,
+    doubled, dprob = dy.switch_period_doubling(prob, br, "PD1", options=co.Options(ds=0.02, ds_max=0.2,
                                                                                    max_points=30 if quick else 80))
-    doubled_ds = po.branch_dataset(dprob, doubled, {"source": "period_doubling", "from": "PD1"})
+    doubled_ds = dy.branch_dataset(dprob, doubled, {"source": "period_doubling", "from": "PD1"})
     _store(doubled_ds, out / "periodic_roessler_doubled.nc")
     # ---- the tippedisk
     setup = td.Setup(friction=td.Friction(eps=0.25))
     inverted = sc.continue_branch("inverted", "omega", 0.0, 60.0, setup=setup)
-    hopf = po.tippedisk_orbits_from_hopf(inverted, "HOPF1", amplitudes=(1e-3, 1e-2) if quick else (1e-3, 1e-2, 5e-2),
-                                         max_iter=6 if quick else 25)
+    hopf = orbits.tippedisk_orbits_from_hopf(inverted, "HOPF1",
+                                             amplitudes=(1e-3, 1e-2) if quick else (1e-3, 1e-2, 5e-2),
+                                             max_iter=6 if quick else 25)
     _store(hopf, out / "periodic_tippedisk_hopf1.nc")
     runs = {}
     for eps in (0.25, 0.1):
         run = td.simulate("ode-euler", 10.0 if quick else 60.0, setup=td.Setup(friction=td.Friction(eps=eps)),
                           dt_output=0.01)
-        ds = po.tippedisk_orbits_from_run(run, max_iter=6 if quick else 25)
+        ds = orbits.tippedisk_orbits_from_run(run, max_iter=6 if quick else 25)
         runs[eps] = ds
         _store(ds, out / f"periodic_tippedisk_run_eps{eps:g}.nc")
     _summary_figure(bautin_ds, roessler_ds, doubled_ds, runs, out / "periodic_orbits.png")
     _print_returns(runs)
     # ---- the frictionless tippedisk (mu = 0): the only periodic orbits of the disk
     frictionless = td.Setup(friction=td.Friction(mu=0.0))
-    br, prob = po.tippedisk_lyapunov_family(frictionless, "inverted", 40.0, 0.41 if quick else 0.5)
-    family = po.tippedisk_branch_dataset(prob, br, {"source": "frictionless", "branch": "inverted", "omega": 40.0})
+    br, prob = orbits.tippedisk_lyapunov_family(frictionless, "inverted", 40.0, 0.41 if quick else 0.5)
+    family = orbits.tippedisk_branch_dataset(prob, br, {"source": "frictionless", "branch": "inverted", "omega": 40.0})
     _store(family, out / "periodic_tippedisk_frictionless.nc")
     for p in (br.points[0], br.points[-1]):
         orbit = prob.orbit(p.u)
-        check = po.tippedisk_full_model_check(orbit, frictionless)
+        check = orbits.tippedisk_full_model_check(orbit, frictionless)
         print(f"mu = 0, E_tot = {p.u[-1]:.6f} J: T = {orbit.period:.12f} s, beta_dot = 0 return time "
               f"{check['section_period']:.12f} s, ODE Model 1 closes the orbit to {check['return_error']:.2g}; "
               f"largest multiplier {np.abs(orbit.multipliers).max():.4g}")

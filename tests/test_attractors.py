@@ -15,13 +15,14 @@ import pytest
 import xarray as xr
 
 from tippedisk_analysis import ParameterError, load
-from tippedisk_analysis.analysis import attractors as at
 from tippedisk_analysis.analysis import basins as bs
 from tippedisk_analysis.analysis import outcome_map as om
-from tippedisk_analysis.analysis import stability, sweeps
+from tippedisk_analysis.analysis import stability
 from tippedisk_analysis.analysis import stationary as st
 from tippedisk_analysis.analysis.reduced import full_from_reduced
 from tippedisk_analysis.cli import main
+from tippedisk_analysis.dynamics import attractors as at
+from tippedisk_analysis.dynamics import sweeps
 from tippedisk_analysis.models import ode
 from tippedisk_analysis.parameters import Friction, Setup
 

@@ -364,8 +364,9 @@ def _curve_omega_at(curve, eps, omega_c):
     prob = sc.problem(["omega", "eps"], td.Setup(friction=td.Friction(eps=0.25)), branch=config["branch"],
                       critical=config["critical"])
     for i in np.flatnonzero((e[:-1] - eps) * (e[1:] - eps) <= 0):
-        u_guess = np.array([*(float(curve[n][i]) for n in reduced.STATE_NAMES), om[i], e[i]])
-        u = co.solve_at(prob, u_guess, 8, eps)
+        w = 0.0 if e[i + 1] == e[i] else (eps - e[i]) / (e[i + 1] - e[i])  # the chord at eps (a special point such
+        ends = [np.array([*(float(curve[n][j]) for n in reduced.STATE_NAMES), om[j], e[j]]) for j in (i, i + 1)]
+        u = co.solve_at(prob, (1 - w) * ends[0] + w * ends[1], 8, eps)  # as HH1 at an end lies on two curves)
         if u is not None:
             best = min(best, abs(u[7] - omega_c))
     return best

@@ -3,6 +3,7 @@ analyses on it, proven on AUTO-07p's demo 'ab' (B = 14, beta = 2) against exact 
 
 from __future__ import annotations
 
+import copy
 import math
 import re
 
@@ -169,9 +170,11 @@ def test_ab_orbits_from_the_hopf_point_have_auto07p_periods_and_end_in_a_homocli
     assert np.all(np.diff(ds.period.values) > 0)  # the period grows monotonically towards the homoclinic orbit
 
 
-def test_one_system_through_equilibria_orbits_and_lyapunov_exponents(ab, ab_orbits):
-    """The stable orbit at D = 0.12: its largest Lyapunov exponent is 0 (the flow direction) and the other one
-    is its Floquet exponent log|mu_2| / T (a measured growth rate against the monodromy)."""
+def test_one_system_through_equilibria_orbits_lyapunov_exponents_and_basins(ab, ab_orbits):
+    """The stable orbit at D = 0.12 (from the Hopf point of the equilibrium branch): its largest Lyapunov exponent
+    is 0 (the flow direction) and the other one is its Floquet exponent log|mu_2| / T (a measured growth rate
+    against the monodromy); the basins of the same System find it as the one attractor, with the same period,
+    and its state on the shooting orbit."""
     i = int(ab_orbits.special_index.values[list(ab_orbits.special_label.values).index("UZ2")])
     T = float(ab_orbits.period[i])
     mu = ab_orbits.multiplier_real.values[i] + 1j * ab_orbits.multiplier_imag.values[i]
@@ -182,6 +185,16 @@ def test_one_system_through_equilibria_orbits_and_lyapunov_exponents(ab, ab_orbi
     assert abs(float(ly.exponents[0])) < 2e-3
     assert float(ly.exponents[1]) == pytest.approx(floquet_exponent, rel=2e-3)
     assert float(ly.exponents.sum()) == pytest.approx(float(ly.divergence_mean), rel=1e-3)
+    grid = dy.Grid(("u1", "u2"), (-0.2, -1.0), (1.2, 10.0), (70, 110))
+    at = dy.basins(ab, grid, {"u1": (0.0, 1.0, 4), "u2": (0.0, 8.0, 4)}, pars=ab.with_pars(D=0.12), horizon=400.0,
+                   progress=False)
+    assert at.sizes["attractor"] == 1 and np.all(at.outcome.values == 0) and int(at.attractor_kind[0]) == 1
+    assert float(at.attractor_period[0]) == pytest.approx(T, rel=1e-7)
+    ta = copy.copy(ab.taylor(1e-13))
+    ta.state[:], ta.pars[:], ta.time = x0, ab.with_pars(D=0.12), 0.0
+    path = ta.propagate_grid(np.linspace(0.0, T, 4001))[-1]  # the shooting orbit, sampled
+    spacing = np.max(np.linalg.norm(np.diff(path, axis=0), axis=1))
+    assert np.min(np.linalg.norm(path - at.attractor_state.values[0], axis=1)) < 0.5 * spacing
 
 
 def test_roessler_lyapunov_spectrum_against_the_published_values():

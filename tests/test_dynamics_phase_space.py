@@ -29,7 +29,7 @@ AB_AXES = {"u1": (0.0, 1.0, 5), "u2": (0.0, 8.0, 5)}
 def test_ab_has_one_periodic_attractor_at_d_012_with_auto07p_period(ab):
     """Between the homoclinic limit (D = 0.1055) and the Hopf point (0.1309) the orbit born at the Hopf point is
     the only attractor: every initial condition reaches it, and its period is AUTO-07p's."""
-    ds = dy.basins(ab, AB_AXES, grid=dy.Grid(**AB_GRID), pars=ab.with_pars(D=0.12), horizon=400.0, progress=False)
+    ds = dy.basins(ab, dy.Grid(**AB_GRID), AB_AXES, pars=ab.with_pars(D=0.12), horizon=400.0, progress=False)
     assert ds.attrs["kind"] == "basins" and ds.attrs["status"] == "completed"
     assert ds.sizes["attractor"] == 1 and np.all(ds.outcome.values == 0)
     assert int(ds.attractor_kind[0]) == 1  # periodic
@@ -42,7 +42,7 @@ def test_ab_has_the_lower_equilibrium_as_its_attractor_at_d_0095(ab):
     every run ends on the lower equilibrium u2 = B u1 / (1 + beta), D = u1 exp(-u2) / (1 - u1)."""
     D = 0.095
     u1 = brentq(lambda u: u * math.exp(-14.0 * u / 3.0) / (1 - u) - D, 1e-9, 0.3)
-    ds = dy.basins(ab, AB_AXES, grid=dy.Grid(**AB_GRID), pars=ab.with_pars(D=D), horizon=400.0, progress=False)
+    ds = dy.basins(ab, dy.Grid(**AB_GRID), AB_AXES, pars=ab.with_pars(D=D), horizon=400.0, progress=False)
     assert ds.sizes["attractor"] == 1 and np.all(ds.outcome.values == 0)
     assert int(ds.attractor_kind[0]) == 0  # equilibrium
     np.testing.assert_allclose(ds.attractor_state.values[0], [u1, 14.0 * u1 / 3.0], atol=1e-9)
@@ -54,7 +54,7 @@ def test_double_well_basins_are_swapped_by_the_symmetry():
     function, not only from the spreads of one short window."""
     well = dy.textbook_system("double_well")
     grid = dy.Grid(("x", "v"), (-2.5, -2.5), (2.5, 2.5), (50, 50))
-    ds = dy.basins(well, {"x": (-2.0, 2.0, 10), "v": (-2.0, 2.0, 10)}, grid=grid, horizon=500.0, progress=False)
+    ds = dy.basins(well, grid, {"x": (-2.0, 2.0, 10), "v": (-2.0, 2.0, 10)}, horizon=500.0, progress=False)
     assert ds.sizes["attractor"] == 2 and np.all(ds.attractor_kind.values == 0)
     np.testing.assert_allclose(np.sort(ds.attractor_state.values[:, 0]), [-1.0, 1.0], atol=1e-9)
     np.testing.assert_allclose(ds.attractor_state.values[:, 1], 0.0, atol=1e-9)
@@ -66,7 +66,7 @@ def test_double_well_basins_are_swapped_by_the_symmetry():
 
 def test_basins_name_a_grid_coordinate_the_system_does_not_have(ab):
     with pytest.raises(ParameterError, match="'w' is neither a state nor an observable of ab"):
-        dy.basins(ab, AB_AXES, grid=dy.Grid(("u1", "w"), (0, 0), (1, 1), (4, 4)), progress=False)
+        dy.basins(ab, dy.Grid(("u1", "w"), (0, 0), (1, 1), (4, 4)), AB_AXES, progress=False)
 
 
 def test_van_der_pol_section_returns_with_the_period_to_the_same_point():

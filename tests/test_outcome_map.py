@@ -15,7 +15,7 @@ import xarray as xr
 from tippedisk_analysis import ParameterError, load
 from tippedisk_analysis.analysis import outcome_config
 from tippedisk_analysis.analysis import outcome_map as om
-from tippedisk_analysis.analysis import sweeps
+from tippedisk_analysis.dynamics import sweeps
 from tippedisk_analysis.cli import main
 from tippedisk_analysis.models import ode
 from tippedisk_analysis.parameters import Disk
@@ -110,7 +110,8 @@ def test_round_trip_and_dims(tmp_path):
 
 KILL_SCRIPT = textwrap.dedent("""
     import os, signal, sys
-    from tippedisk_analysis.analysis import outcome_map as om, sweeps
+    from tippedisk_analysis.analysis import outcome_map as om
+    from tippedisk_analysis.dynamics import sweeps
     cfg = om.MapConfig(ranges={ranges!r}, **{opts!r})
     stored = []
     def on_chunk(i):

@@ -11,8 +11,9 @@ import pytest
 from scipy.integrate import quad
 
 import tippedisk_analysis as td
-from tippedisk_analysis.analysis import continuation as co
-from tippedisk_analysis.analysis import periodic as po
+from tippedisk_analysis.dynamics import continuation as co
+from tippedisk_analysis import dynamics as dy
+from tippedisk_analysis.analysis import orbits
 from tippedisk_analysis.errors import ParameterError
 
 VDP_PERIOD = 6.6632868593231  # mu = 1 (literature value, 14 digits)
@@ -20,7 +21,7 @@ VDP_PERIOD = 6.6632868593231  # mu = 1 (literature value, 14 digits)
 
 @pytest.fixture(scope="module")
 def vdp():
-    return po.find_orbit(po.textbook_system("vanderpol"), [2.0, 0.0], 6.66)
+    return dy.find_orbit(dy.textbook_system("vanderpol"), [2.0, 0.0], 6.66)
 
 
 def _crossings(flow, x, pars, t_end, dt=0.01, index=0):
@@ -44,7 +45,7 @@ def test_van_der_pol_period_and_multiplier_against_a_long_simulation(vdp):
     assert vdp.status == "converged" and vdp.residual < 1e-12
     assert vdp.period == pytest.approx(VDP_PERIOD, abs=1e-11)
     system = vdp.system
-    flow = po.Flow(system)
+    flow = dy.Flow(system)
     # the period: return times of a long simulation from far off the orbit, after the transient
     cr = _crossings(flow, np.array([0.1, 0.0]), system.pars, 300.0)
     assert np.diff([t for t, _ in cr[-10:]]) == pytest.approx(vdp.period, abs=1e-9)
@@ -61,9 +62,9 @@ def test_van_der_pol_period_and_multiplier_against_a_long_simulation(vdp):
 
 
 def test_variational_monodromy_matches_finite_differences(vdp):
-    for orbit in (vdp, po.find_orbit(po.textbook_system("roessler"), [4.58086947, 0.0, 1.52654668], 5.749)):
-        M = po.ShootingProblem(orbit.system).flow.variational(orbit.states[0], orbit.period, orbit.pars)[1]
-        fd = po.monodromy_fd(orbit.system, orbit.states[0], orbit.period, orbit.pars)
+    for orbit in (vdp, dy.find_orbit(dy.textbook_system("roessler"), [4.58086947, 0.0, 1.52654668], 5.749)):
+        M = dy.ShootingProblem(orbit.system).flow.variational(orbit.states[0], orbit.period, orbit.pars)[1]
+        fd = dy.monodromy_fd(orbit.system, orbit.states[0], orbit.period, orbit.pars)
         assert np.abs(M - fd).max() < 1e-6 * max(1.0, np.abs(M).max())
         mu_fd = np.sort_complex(np.linalg.eigvals(fd))
         assert np.abs(np.sort_complex(orbit.multipliers) - mu_fd).max() < 1e-6
@@ -71,7 +72,7 @@ def test_variational_monodromy_matches_finite_differences(vdp):
 
 
 def test_stable_orbit_returns_to_itself_after_ten_periods(vdp):
-    flow = po.Flow(vdp.system)
+    flow = dy.Flow(vdp.system)
     x = vdp.states[0]
     for _ in range(10):
         y = flow.advance(x, vdp.period, vdp.pars)
@@ -81,7 +82,7 @@ def test_stable_orbit_returns_to_itself_after_ten_periods(vdp):
 
 @pytest.mark.parametrize("segments, phase", [(1, "integral"), (4, "poincare"), (5, "integral")])
 def test_multiple_shooting_and_integral_phase_give_the_same_orbit(vdp, segments, phase):
-    orbit = po.find_orbit(vdp.system, [2.0, 0.1], 6.7, segments=segments, phase=phase)
+    orbit = dy.find_orbit(vdp.system, [2.0, 0.1], 6.7, segments=segments, phase=phase)
     assert orbit.status == "converged" and len(orbit.states) == segments
     assert orbit.period == pytest.approx(vdp.period, abs=1e-10)
     assert np.abs(orbit.multipliers - vdp.multipliers).max() < 1e-9
@@ -89,15 +90,15 @@ def test_multiple_shooting_and_integral_phase_give_the_same_orbit(vdp, segments,
 
 def test_unstable_orbit_multiplier_gives_the_growth_rate_of_a_simulation():
     """van der Pol with mu = -1: the time-reversed oscillator, its cycle repels (multiplier ~1163)."""
-    system = po.textbook_system("vanderpol")
+    system = dy.textbook_system("vanderpol")
     pars = system.with_pars(mu=-1.0)
-    orbit = po.find_orbit(system, [2.0, 0.0], 6.66, pars)
-    assert orbit.status == "converged" and orbit.stability == po.STABILITY["unstable"]
+    orbit = dy.find_orbit(system, [2.0, 0.0], 6.66, pars)
+    assert orbit.status == "converged" and orbit.stability == dy.STABILITY["unstable"]
     rate = orbit.exponents[~orbit.trivial].max()
-    flow = po.Flow(system)
+    flow = dy.Flow(system)
     x0 = orbit.states[0]  # on the section x ... the perturbation grows by mu per return
     delta = 1e-10
-    vals, vecs = np.linalg.eig(po.ShootingProblem(system, pars).flow.variational(x0, orbit.period, pars)[1])
+    vals, vecs = np.linalg.eig(dy.ShootingProblem(system, pars).flow.variational(x0, orbit.period, pars)[1])
     v = vecs[:, np.argmax(np.abs(vals))].real
     n = 3
     y = flow.advance(x0 + delta * v / np.linalg.norm(v), n * orbit.period, pars)
@@ -106,41 +107,41 @@ def test_unstable_orbit_multiplier_gives_the_growth_rate_of_a_simulation():
 
 
 def test_equilibria_are_never_labelled_as_orbits():
-    hopf = po.textbook_system("hopf")
+    hopf = dy.textbook_system("hopf")
     stable_focus = hopf.with_pars(beta=-0.05)  # no cycle: every guess collapses onto the equilibrium
-    orbit = po.find_orbit(hopf, [0.05, 0.0, 0.0], 2 * math.pi, stable_focus)
+    orbit = dy.find_orbit(hopf, [0.05, 0.0, 0.0], 2 * math.pi, stable_focus)
     assert orbit.status in ("equilibrium", "not_converged") and not orbit.converged
-    tiny = po.find_orbit(po.textbook_system("vanderpol"), [1e-3, 0.0], 6.3, [-1.0])  # stable origin, tiny guess
+    tiny = dy.find_orbit(dy.textbook_system("vanderpol"), [1e-3, 0.0], 6.3, [-1.0])  # stable origin, tiny guess
     assert tiny.status == "equilibrium" and "not a periodic orbit" in tiny.message
-    ds = po.orbits_dataset([tiny], "no_orbit", tiny.message, {})
-    assert int(ds.orbit_status[0]) == po.STATUS["equilibrium"] and ds.attrs["n_orbits"] == 0
+    ds = dy.orbits_dataset([tiny], "no_orbit", tiny.message, {})
+    assert int(ds.orbit_status[0]) == dy.STATUS["equilibrium"] and ds.attrs["n_orbits"] == 0
 
 
 def test_bad_guesses_are_one_line_errors():
-    system = po.textbook_system("vanderpol")
+    system = dy.textbook_system("vanderpol")
     with pytest.raises(ParameterError, match="period guess"):
-        po.find_orbit(system, [2.0, 0.0], -1.0)
+        dy.find_orbit(system, [2.0, 0.0], -1.0)
     with pytest.raises(ParameterError, match="2 finite numbers"):
-        po.find_orbit(system, [2.0, 0.0, 1.0], 6.0)
+        dy.find_orbit(system, [2.0, 0.0, 1.0], 6.0)
     with pytest.raises(ParameterError, match="no parameter"):
-        po.orbit_problem(po.find_orbit(system, [2.0, 0.0], 6.66), "nu")
+        dy.orbit_problem(dy.find_orbit(system, [2.0, 0.0], 6.66), "nu")
     with pytest.raises(ParameterError, match="unknown system"):
-        po.textbook_system("pendulum")
+        dy.textbook_system("pendulum")
 
 
 # ----------------------------------------------------------------------------- from a Hopf point
 
 
 def test_hopf_normal_form_period_and_amplitude_near_the_hopf_point():
-    system = po.textbook_system("hopf")  # l1 (cartesian) = -1, omega = 1, c = 0.5: r^2 = beta, T = 2 pi/(1 + c r^2)
+    system = dy.textbook_system("hopf")  # l1 (cartesian) = -1, omega = 1, c = 0.5: r^2 = beta, T = 2 pi/(1 + c r^2)
     ratios = []
     for radius in (0.1, 0.03, 0.01):
-        orbit, g = po.orbit_from_hopf(system, "beta", 0.0, [0.0, 0.0, 0.0], radius=radius)
+        orbit, g = dy.orbit_from_hopf(system, "beta", 0.0, [0.0, 0.0, 0.0], radius=radius)
         assert orbit.status == "converged" and g.a == pytest.approx(1.0) and g.omega == pytest.approx(1.0)
         assert orbit.period == pytest.approx(2 * math.pi / (1 + 0.5 * g.value), rel=1e-11)
         ratios.append(orbit.amplitude / math.sqrt(g.value))
     assert abs(ratios[-1] - 1) < abs(ratios[0] - 1) and ratios[-1] == pytest.approx(1.0, abs=2e-4)
-    br, prob = po.continue_orbits(orbit, "beta", bounds={"beta": (-1.0, 0.05)}, direction=-1)
+    br, prob = dy.continue_orbits(orbit, "beta", bounds={"beta": (-1.0, 0.05)}, direction=-1)
     assert br.special_points[-1].kind == "hopf" and abs(br.special_points[-1].u[-1]) < 1e-9
     assert br.special_points[-1].data["frequency"] == pytest.approx(1.0, abs=1e-8)  # period -> 2 pi / omega
 
@@ -148,10 +149,10 @@ def test_hopf_normal_form_period_and_amplitude_near_the_hopf_point():
 def test_bautin_fold_of_cycles_exactly_where_the_normal_form_puts_it():
     """z' = (beta + i) z + z|z|^2 - z|z|^4: fold at beta = -1/4, r^2 = 1/2; nontrivial multiplier
     exp(2 pi 2 r^2 (1 - 2 r^2))."""
-    system = po.textbook_system("bautin")
-    orbit, g = po.orbit_from_hopf(system, "beta", 0.0, [0.0, 0.0], radius=0.2)
-    assert g.l1 == pytest.approx(2.0) and orbit.stability == po.STABILITY["unstable"]  # subcritical
-    br, prob = po.continue_orbits(orbit, "beta", bounds={"beta": (-0.5, 0.3)}, direction=-1)
+    system = dy.textbook_system("bautin")
+    orbit, g = dy.orbit_from_hopf(system, "beta", 0.0, [0.0, 0.0], radius=0.2)
+    assert g.l1 == pytest.approx(2.0) and orbit.stability == dy.STABILITY["unstable"]  # subcritical
+    br, prob = dy.continue_orbits(orbit, "beta", bounds={"beta": (-0.5, 0.3)}, direction=-1)
     folds = [sp for sp in br.special_points if sp.kind == "fold"]
     assert len(folds) == 1 and folds[0].label == "LP1"
     assert folds[0].u[-1] == pytest.approx(-0.25, abs=1e-9)
@@ -163,7 +164,7 @@ def test_bautin_fold_of_cycles_exactly_where_the_normal_form_puts_it():
         assert o.period == pytest.approx(2 * math.pi, abs=1e-10)
         assert o.multipliers[~o.trivial][0].real == pytest.approx(math.exp(4 * math.pi * r2 * (1 - 2 * r2)), rel=1e-7)
     flags = [prob.orbit(p.u).stability for p in (br.points[1], br.points[-1])]
-    assert flags == [po.STABILITY["unstable"], po.STABILITY["stable"]]  # the fold joins the two cycles
+    assert flags == [dy.STABILITY["unstable"], dy.STABILITY["stable"]]  # the fold joins the two cycles
 
 
 # ----------------------------------------------------------------------------- period doubling, NS, homoclinic
@@ -171,10 +172,10 @@ def test_bautin_fold_of_cycles_exactly_where_the_normal_form_puts_it():
 
 @pytest.fixture(scope="module")
 def roessler():
-    system = po.textbook_system("roessler")
-    x0, T0 = po.simulation_guess(system, [1.0, 1.0, 0.0], index=1, level=0.0, transient=200.0)
-    orbit = po.find_orbit(system, x0, T0)
-    br, prob = po.continue_orbits(orbit, "c", bounds={"c": (2.5, 3.2)})
+    system = dy.textbook_system("roessler")
+    x0, T0 = dy.simulation_guess(system, [1.0, 1.0, 0.0], index=1, level=0.0, transient=200.0)
+    orbit = dy.find_orbit(system, x0, T0)
+    br, prob = dy.continue_orbits(orbit, "c", bounds={"c": (2.5, 3.2)})
     return br, prob
 
 
@@ -200,7 +201,7 @@ def test_roessler_period_doubling_cross_checked_by_a_finite_difference_return_ma
     # independent: the return map to y = 0 (x, z on the section), central differences, no variational equations
     X, T, _c = prob.split(pd[0].u)
     pars = prob.runtime(pd[0].u)
-    flow = po.Flow(prob.system)
+    flow = dy.Flow(prob.system)
     x0 = _return_map(flow, pars, X[0], T)  # a point of the orbit on the section
     h, D = 1e-5, np.empty((2, 2))
     for j, k in enumerate((0, 2)):
@@ -213,18 +214,18 @@ def test_roessler_period_doubling_cross_checked_by_a_finite_difference_return_ma
 def test_switching_at_the_period_doubling_gives_the_doubled_orbit_seen_in_simulation(roessler):
     br, prob = roessler
     options = co.Options(ds=0.02, ds_max=0.2, max_points=25)
-    doubled, dprob = po.switch_period_doubling(prob, br, "PD1", options=options)
+    doubled, dprob = dy.switch_period_doubling(prob, br, "PD1", options=options)
     c_pd = [sp.u[-1] for sp in br.special_points if sp.kind == "period_doubling"][0]
     point = next(p for p in doubled.points if p.u[-1] > c_pd + 0.02)
     X, T2, c = dprob.split(point.u)
     T1 = br.points[np.argmin([abs(p.u[-1] - c) for p in br.points])].u[-2]
     assert T2 == pytest.approx(2 * T1, rel=0.01)
     assert np.linalg.norm(X[0] - X[len(X) // 2]) > 1e-2  # the two halves differ: not the old orbit twice
-    assert dprob.orbit(point.u).stability == po.STABILITY["stable"]
+    assert dprob.orbit(point.u).stability == dy.STABILITY["stable"]
     # simulation at that c: the section points alternate between two values, those of the doubled orbit
     system = prob.system
     pars = system.with_pars(c=c)
-    flow = po.Flow(system)
+    flow = dy.Flow(system)
     x = flow.advance(np.array([1.0, 1.0, 0.0]), 1500.0, pars)
     cr = _crossings(flow, x, pars, 60.0, index=1)
     sim = sorted(s[0] for _t, s in cr[-2:])
@@ -234,13 +235,13 @@ def test_switching_at_the_period_doubling_gives_the_doubled_orbit_seen_in_simula
 
 
 def test_neimark_sacker_point_of_a_cycle_times_a_hopf_normal_form():
-    system = po.textbook_system("torus")
-    orbit = po.find_orbit(system, [1.0, 0.0, 0.0, 0.0], 2 * math.pi)
+    system = dy.textbook_system("torus")
+    orbit = dy.find_orbit(system, [1.0, 0.0, 0.0, 0.0], 2 * math.pi)
     mu = np.sort_complex(orbit.multipliers[~orbit.trivial])
     pair = np.exp(2 * math.pi * (-0.1 + np.array([1j, -1j]) * math.sqrt(2)))
     exact = np.sort_complex([math.exp(-4 * math.pi), *pair])
     assert np.abs(mu - exact).max() < 1e-9
-    br, prob = po.continue_orbits(orbit, "beta", bounds={"beta": (-0.1, 0.1)})
+    br, prob = dy.continue_orbits(orbit, "beta", bounds={"beta": (-0.1, 0.1)})
     ns = [sp for sp in br.special_points if sp.kind == "neimark_sacker"]
     assert [sp.label for sp in ns] == ["NS1"]
     assert abs(ns[0].u[-1]) < 1e-9
@@ -250,8 +251,8 @@ def test_neimark_sacker_point_of_a_cycle_times_a_hopf_normal_form():
 
 def test_period_grows_without_bound_at_a_homoclinic_orbit():
     """Level sets H = c of a Hamiltonian loop: Hopf at c = -1/6, homoclinic at c = 0, saddle eigenvalue 1."""
-    system = po.textbook_system("homoclinic")
-    orbit, g = po.orbit_from_hopf(system, "c", -1.0 / 6.0, [1.0, 0.0], radius=0.05)
+    system = dy.textbook_system("homoclinic")
+    orbit, g = dy.orbit_from_hopf(system, "c", -1.0 / 6.0, [1.0, 0.0], radius=0.05)
     assert orbit.status == "converged"
     # the period equals the Hamiltonian one at H = c: T = 2 int dx / sqrt(2 (c + x^2/2 - x^3/3))
     c = g.value
@@ -259,21 +260,21 @@ def test_period_grows_without_bound_at_a_homoclinic_orbit():
     a, b, e = roots[1], roots[2], roots[0]
     period = 2 * quad(lambda x: 1 / math.sqrt(2 / 3 * (x - e)), a, b, weight="alg", wvar=(-0.5, -0.5))[0]
     assert orbit.period == pytest.approx(period, rel=1e-9)
-    br, prob = po.continue_orbits(orbit, "c", bounds={"c": (-0.2, 0.1)}, period_max=30.0, segments=4,
+    br, prob = dy.continue_orbits(orbit, "c", bounds={"c": (-0.2, 0.1)}, period_max=30.0, segments=4,
                                   options=co.Options(ds=0.02, ds_max=0.2, max_points=200))
     hc = br.special_points[-1]
     assert hc.kind == "homoclinic" and hc.label == "HC1" and hc.data["period"] == pytest.approx(30.0)
     assert abs(hc.data["limit"]) < 1e-8 and hc.data["rate"] == pytest.approx(1.0, rel=0.02)
-    ds = po.branch_dataset(prob, br, {"source": "hopf"})
+    ds = dy.branch_dataset(prob, br, {"source": "hopf"})
     assert ds.attrs["labels"] == "HC1" and "homoclinic" in ds.attrs["message"]
 
 
 def test_branch_dataset_round_trip(tmp_path):
-    system = po.textbook_system("bautin")
-    orbit, _g = po.orbit_from_hopf(system, "beta", 0.0, [0.0, 0.0], radius=0.3)
-    br, prob = po.continue_orbits(orbit, "beta", bounds={"beta": (-0.3, 0.0)}, direction=-1,
+    system = dy.textbook_system("bautin")
+    orbit, _g = dy.orbit_from_hopf(system, "beta", 0.0, [0.0, 0.0], radius=0.3)
+    br, prob = dy.continue_orbits(orbit, "beta", bounds={"beta": (-0.3, 0.0)}, direction=-1,
                                   options=co.Options(ds=0.05, ds_max=0.1, max_points=12))
-    ds = po.branch_dataset(prob, br, {"source": "test"})
+    ds = dy.branch_dataset(prob, br, {"source": "test"})
     assert ds.attrs["kind"] == "periodic_orbits" and set(ds.dims) >= {"point", "floquet", "sample", "state"}
     path = td.save(ds, tmp_path / "po.nc")
     back = td.load(path)
@@ -292,36 +293,36 @@ def inverted_branch():
 
 
 def test_tippedisk_newton_from_the_hopf_point_finds_no_orbit(inverted_branch):
-    ds = po.tippedisk_orbits_from_hopf(inverted_branch, "HOPF1", amplitudes=(1e-3, 1e-2), max_iter=6)
+    ds = orbits.tippedisk_orbits_from_hopf(inverted_branch, "HOPF1", amplitudes=(1e-3, 1e-2), max_iter=6)
     assert ds.attrs["status"] == "no_orbit" and ds.attrs["n_orbits"] == 0
-    assert not (ds.orbit_status == po.STATUS["converged"]).any()
+    assert not (ds.orbit_status == dy.STATUS["converged"]).any()
     assert (ds.energy_change < 0).all()  # every trial period loses energy
     res = ds.residual.values  # the mismatch after one trial period shrinks like r^2 (r' = k r^2): no orbit at any r
     assert res[1] / res[0] == pytest.approx(100, rel=0.5)
     with pytest.raises(ParameterError, match="Hopf point"):
-        po.tippedisk_orbits_from_hopf(inverted_branch, "BP1")
+        orbits.tippedisk_orbits_from_hopf(inverted_branch, "BP1")
 
 
 def test_tippedisk_equilibrium_is_reported_as_such():
     from tippedisk_analysis.analysis import stationary
 
     setup = td.Setup(friction=td.Friction(eps=0.25))
-    system = po.tippedisk_system(setup)
+    system = orbits.tippedisk_system(setup)
     x = stationary.stationary_state("inverted", [31.63])[:, 0]
-    orbit = po.find_orbit(system, x + 1e-9 * np.array([1, 1, 0, 0, 0, 1, 1]), 0.2288, max_iter=8)
+    orbit = dy.find_orbit(system, x + 1e-9 * np.array([1, 1, 0, 0, 0, 1, 1]), 0.2288, max_iter=8)
     assert orbit.status == "equilibrium" and not orbit.converged
     assert orbit.trivial.sum() == 2  # the flow direction and the spin family
 
 
 def test_tippedisk_runs_lose_energy_at_every_return():
     run = td.simulate("ode-euler", 6.0, setup=td.Setup(friction=td.Friction(eps=0.25)), dt_output=0.01)
-    ds = po.tippedisk_orbits_from_run(run, max_iter=6)
-    assert ds.attrs["status"] == "no_orbit" and int(ds.orbit_status[0]) != po.STATUS["converged"]
+    ds = orbits.tippedisk_orbits_from_run(run, max_iter=6)
+    assert ds.attrs["status"] == "no_orbit" and int(ds.orbit_status[0]) != dy.STATUS["converged"]
     dE = ds.return_energy_change.values[:-1]
     assert (dE < 0).all()
     np.testing.assert_allclose(dE, ds.return_friction_work.values[:-1], rtol=1e-6, atol=1e-12)  # energy balance
     with pytest.raises(ParameterError, match="kind"):
-        po.tippedisk_orbits_from_run(inverted_branch_like())
+        orbits.tippedisk_orbits_from_run(inverted_branch_like())
 
 
 def inverted_branch_like():
@@ -390,7 +391,7 @@ def test_branch_continues_from_a_stored_orbit(tmp_path, capsys):
     first = tmp_path / "b.nc"
     assert main(["periodic-orbits", "--system", "bautin", "--to", "-0.3", "--segments", "2", "-o", str(first)]) == 0
     ds = td.load(first)
-    orbit = po.orbit_from_dataset(ds, 3)
+    orbit = orbits.orbit_from_dataset(ds, 3)
     assert orbit.converged and len(orbit.states) == 2 and orbit.parameter == "beta"
     assert orbit.period == pytest.approx(float(ds.period[3]), abs=1e-12)
     out = tmp_path / "more.nc"  # from the small (unstable) cycle towards beta > 0: it shrinks into the Hopf point
@@ -414,16 +415,16 @@ def test_branch_continues_from_a_stored_orbit(tmp_path, capsys):
 def test_conservative_family_in_the_energy_level_matches_quadrature():
     """Duffing x'' + x + x^3 = 0: orbits come in a family (two trivial multipliers); pinning the energy makes
     the shooting system consistent and overdetermined; the period along the family equals the quadrature."""
-    system = po.textbook_system("duffing")
-    orbit = po.find_orbit(system, [1.0, 0.0], 5.0)
-    assert orbit.converged and orbit.trivial.sum() == 2 and orbit.stability == po.STABILITY["marginal"]
+    system = dy.textbook_system("duffing")
+    orbit = dy.find_orbit(system, [1.0, 0.0], 5.0)
+    assert orbit.converged and orbit.trivial.sum() == 2 and orbit.stability == dy.STABILITY["marginal"]
 
     def period(E):
         a2 = -1 + math.sqrt(1 + 4 * E)
         return 4 * quad(lambda x: 1 / math.sqrt(2 * (math.sqrt(a2) + x) * (0.5 + (a2 + x * x) / 4)), 0,
                         math.sqrt(a2), weight="alg", wvar=(0, -0.5))[0]
 
-    br, prob = po.continue_orbits(orbit, "E", bounds={"E": (0.1, 3.0)}, both_ways=True,
+    br, prob = dy.continue_orbits(orbit, "E", bounds={"E": (0.1, 3.0)}, both_ways=True,
                                   options=co.Options(ds=0.05, ds_max=0.2, max_points=30))
     assert br.status == "completed" and not br.special_points
     for p in br.points[::3]:
@@ -433,19 +434,19 @@ def test_conservative_family_in_the_energy_level_matches_quadrature():
 def test_frictionless_tippedisk_orbit_checked_with_ode_model_1():
     """mu = 0: the only periodic orbits of the tippedisk (Lyapunov centre family at a saddle-centre spin)."""
     setup = td.Setup(friction=td.Friction(mu=0.0))
-    orbit = po.tippedisk_lyapunov_orbit(setup, "inverted", 40.0, radius=1e-3)
+    orbit = orbits.tippedisk_lyapunov_orbit(setup, "inverted", 40.0, radius=1e-3)
     assert orbit.converged and orbit.trivial.sum() == 3  # flow, energy, vertical angular momentum
     mu = orbit.multipliers[~orbit.trivial]
     saddle = np.sort(np.abs(mu[np.abs(mu.imag) < 1e-9]))
     assert saddle[0] * saddle[1] == pytest.approx(1.0, rel=1e-8)  # a reciprocal pair: conservative
     pair = mu[np.abs(mu.imag) > 1e-9]
     assert np.abs(np.abs(pair) - 1).max() < 1e-8  # S's horizontal velocity turning: on the unit circle
-    check = po.tippedisk_full_model_check(orbit, setup)
+    check = orbits.tippedisk_full_model_check(orbit, setup)
     assert check["return_error"] < 1e-8  # ODE Model 1 (13 states) closes the orbit
     assert check["section_period"] == pytest.approx(orbit.period, abs=1e-9)  # Poincare return time (events)
-    br, prob = po.tippedisk_lyapunov_family(setup, "inverted", 40.0, energy_max=0.41,
-                                            options=co.Options(ds=0.05, ds_max=0.2, max_points=8))
-    levels = [po.integral_levels(prob.system, prob.split(p.u)[0][0]) for p in br.points]
+    br, prob = orbits.tippedisk_lyapunov_family(setup, "inverted", 40.0, energy_max=0.41,
+                                                options=co.Options(ds=0.05, ds_max=0.2, max_points=8))
+    levels = [dy.integral_levels(prob.system, prob.split(p.u)[0][0]) for p in br.points]
     assert np.ptp([lv["L_z"] for lv in levels]) < 1e-12 and np.all(np.diff([lv["E_tot"] for lv in levels]) > 0)
     with pytest.raises(ParameterError, match="without friction"):
-        po.tippedisk_lyapunov_orbit(td.Setup(), "inverted", 40.0)
+        orbits.tippedisk_lyapunov_orbit(td.Setup(), "inverted", 40.0)

@@ -59,7 +59,8 @@ def continue_(args) -> int:
     import dataclasses
 
     from .. import results
-    from ..analysis import continuation, spin_continuation
+    from ..analysis import spin_continuation
+    from ..dynamics import continuation
     from ..parameters import Friction, Setup
 
     output = output_path(args)

@@ -55,7 +55,7 @@ def _arguments(p) -> None:
                             "tippedisk with friction: exit 3)", _arguments)
 def periodic_orbits(args) -> int:
     from .. import results
-    from ..analysis import periodic as po
+    from ..analysis import orbits
 
     starts = [s for s in (args.from_hopf, args.from_run, args.system, args.from_orbit, args.frictionless) if s]
     if len(starts) != 1:
@@ -77,9 +77,9 @@ def periodic_orbits(args) -> int:
             raise ParameterError(f"--amplitudes {args.amplitudes!r}: give numbers separated by commas") from None
         if not amplitudes or any(not a > 0 for a in amplitudes):
             raise ParameterError("--amplitudes must be positive numbers, e.g. 0.001,0.01")
-        ds = po.tippedisk_orbits_from_hopf(results.load(path), label, amplitudes, max_iter=args.max_iter)
+        ds = orbits.tippedisk_orbits_from_hopf(results.load(path), label, amplitudes, max_iter=args.max_iter)
     elif args.from_run:
-        ds = po.tippedisk_orbits_from_run(results.load(args.from_run), crossing=args.crossing, section=args.section,
+        ds = orbits.tippedisk_orbits_from_run(results.load(args.from_run), crossing=args.crossing, section=args.section,
                                           max_iter=args.max_iter)
     elif args.from_orbit:
         path, _, point = args.from_orbit.rpartition(":")
@@ -88,13 +88,13 @@ def periodic_orbits(args) -> int:
         except ValueError:
             raise ParameterError(f"--from-orbit {args.from_orbit!r} is not FILE:POINT; give e.g. b.nc:5") from None
         source = results.load(path)
-        orbit = po.orbit_from_dataset(source, index, max_iter=args.max_iter)
+        orbit = orbits.orbit_from_dataset(source, index, max_iter=args.max_iter)
         parameter = args.parameter or source.attrs.get("parameter") or ""
-        ds = _orbit_or_branch(args, po, orbit, parameter, {"source": "dataset", "file": path, "point": index})
+        ds = _orbit_or_branch(args, orbit, parameter, {"source": "dataset", "file": path, "point": index})
     elif args.frictionless:
-        ds = _frictionless(args, po)
+        ds = _frictionless(args)
     else:
-        ds = _textbook(args, po)
+        ds = _textbook(args)
     results.save(ds, output)
     print(f"{show(output)}: {ds.attrs['message']}")
     if ds.attrs["status"] == "no_orbit":
@@ -102,9 +102,10 @@ def periodic_orbits(args) -> int:
     return 0 if ds.attrs["status"] == "completed" else 1
 
 
-def _frictionless(args, po):
-    from ..analysis import continuation
-    from ..parameters import Friction, Setup
+def _frictionless(args):
+    from ..analysis import orbits
+    from ..dynamics import continuation
+    from ..parameters import Friction, Setup, to_dict
 
     branch, _, omega = args.frictionless.partition(":")
     try:
@@ -116,19 +117,20 @@ def _frictionless(args, po):
     radius = 1e-3 if args.hopf_radius is None else args.hopf_radius
     if not radius > 0:
         raise ParameterError(f"--hopf-radius {radius:g} must be positive")
-    br, prob = po.tippedisk_lyapunov_family(setup, branch, omega, args.to, radius=radius,
-                                            options=continuation.Options(ds=0.02, ds_max=0.1,
-                                                                         max_points=args.max_points))
-    return po.tippedisk_branch_dataset(prob, br, {"source": "frictionless", "branch": branch, "omega": omega,
-                                                  "setup": po._to_dict(setup)})
+    options = continuation.Options(ds=0.02, ds_max=0.1, max_points=args.max_points)
+    br, prob = orbits.tippedisk_lyapunov_family(setup, branch, omega, args.to, radius=radius, options=options)
+    return orbits.tippedisk_branch_dataset(prob, br, {"source": "frictionless", "branch": branch, "omega": omega,
+                                                      "setup": to_dict(setup)})
 
 
-def _textbook(args, po):
-    tb = po.TEXTBOOK.get(args.system)
+def _textbook(args):
+    from .. import dynamics as dy
+
+    tb = dy.TEXTBOOK.get(args.system)
     if tb is None or not tb.start:
-        names = ", ".join(k for k, v in po.TEXTBOOK.items() if v.start)
+        names = ", ".join(k for k, v in dy.TEXTBOOK.items() if v.start)
         raise ParameterError(f"unknown system {args.system!r} for periodic orbits; choose one of {names}")
-    system = po.textbook_system(args.system)
+    system = dy.textbook_system(args.system)
     radius = 0.05 if args.hopf_radius is None else args.hopf_radius
     if not radius > 0:
         raise ParameterError(f"--hopf-radius {radius:g} must be positive")
@@ -136,19 +138,19 @@ def _textbook(args, po):
         return _textbook_hopf_branch(args, system, tb)
     if "hopf" in tb.start:
         value, state = tb.start["hopf"]
-        orbit, _g = po.orbit_from_hopf(system, tb.parameter, value, state, radius=radius,
+        orbit, _g = dy.orbit_from_hopf(system, tb.parameter, value, state, radius=radius,
                                        segments=args.segments or 1, phase=args.phase or "poincare")
     else:
         value, state, period = tb.start["orbit"]
         pars = system.with_pars(**{tb.parameter: value})
         if args.system == "roessler":
-            state, period = po.simulation_guess(system, state, pars, index=1, level=0.0, transient=200.0)
-        orbit = po.find_orbit(system, state, period, pars, segments=args.segments or 1,
+            state, period = dy.simulation_guess(system, state, pars, index=1, level=0.0, transient=200.0)
+        orbit = dy.find_orbit(system, state, period, pars, segments=args.segments or 1,
                               phase=args.phase or "poincare")
         orbit.value, orbit.parameter = value, tb.parameter
     config = {"source": "textbook", "start": {k: list(map(float, v[1])) for k, v in tb.start.items()},
               "facts": tb.facts}
-    return _orbit_or_branch(args, po, orbit, tb.parameter, config)
+    return _orbit_or_branch(args, orbit, tb.parameter, config)
 
 
 def _textbook_hopf_branch(args, system, tb):
@@ -166,14 +168,15 @@ def _textbook_hopf_branch(args, system, tb):
                        config={"source": "textbook", "facts": tb.facts, "to": args.to})
 
 
-def _orbit_or_branch(args, po, orbit, parameter: str, config: dict):
+def _orbit_or_branch(args, orbit, parameter: str, config: dict):
     """The orbit alone, or (with --to) its branch in ``parameter``."""
-    from ..analysis import continuation
+    from .. import dynamics as dy
+    from ..dynamics import continuation
 
     if args.to is None:
         status = "completed" if orbit.converged else ("no_orbit" if orbit.status in ("equilibrium", "not_converged")
                                                       else "failed")
-        return po.orbits_dataset([orbit], status, orbit.message, config)
+        return dy.orbits_dataset([orbit], status, orbit.message, config)
     if not orbit.converged:
         raise ParameterError(f"no start orbit for the branch: {orbit.message}")
     if not parameter:
@@ -183,7 +186,7 @@ def _orbit_or_branch(args, po, orbit, parameter: str, config: dict):
     if args.to == start:
         raise ParameterError(f"--to {args.to:g} equals the start value of {parameter}")
     bounds = {parameter: (min(start, args.to), max(start, args.to))}
-    br, prob = po.continue_orbits(orbit, parameter, bounds=bounds, direction=1 if args.to > start else -1,
+    br, prob = dy.continue_orbits(orbit, parameter, bounds=bounds, direction=1 if args.to > start else -1,
                                   segments=args.segments, phase=args.phase or "poincare", period_max=args.period_max,
                                   options=continuation.Options(ds=0.02, ds_max=0.1, max_points=args.max_points))
-    return po.branch_dataset(prob, br, {**config, "to": args.to})
+    return dy.branch_dataset(prob, br, {**config, "to": args.to})

@@ -10,13 +10,25 @@ from __future__ import annotations
 import importlib
 
 _PUBLIC = {
-    "System": "system", "Event": "system", "Options": "continuation",
-    "equilibrium_branch": "branches", "special_point_curve": "branches",
+    # declaration and the textbook catalogue
+    "System": "system", "Event": "system", "Field": "tensors", "textbook_system": "systems", "TEXTBOOK": "systems",
+    "Textbook": "systems",
+    # continuation and equilibria
+    "Options": "continuation", "Branch": "continuation", "continue_branch": "continuation",
+    "continue_both_ways": "continuation", "switch_branch": "switching", "EquilibriumProblem": "equilibria",
+    "Parameter": "equilibria", "equilibrium_branch": "branches", "special_point_curve": "branches",
     "point_of": "datasets", "special_point": "datasets",
-    "find_orbit": "orbits", "orbit_branch": "orbit_branches", "hopf_branch": "orbit_branches",
-    "orbit_from_dataset": "orbit_datasets",
-    "lyapunov_spectrum": "lyapunov", "poincare_section": "poincare", "textbook_system": "systems",
-    "basins": "attractors.system_problem", "Grid": "attractors.records",
+    # periodic orbits
+    "Flow": "flows", "FlowError": "flows", "STABILITY": "flows", "classify": "flows", "STATUS": "orbits",
+    "find_orbit": "orbits", "orbit_from_hopf": "orbits", "simulation_guess": "orbits",
+    "integral_levels": "orbits", "monodromy_fd": "orbits", "ShootingProblem": "shooting",
+    "PeriodicOrbit": "shooting", "orbit_problem": "orbit_branches", "continue_orbits": "orbit_branches",
+    "hopf_start": "orbit_branches", "hopf_branch": "orbit_branches", "orbit_branch": "orbit_branches",
+    "switch_period_doubling": "orbit_branches", "homoclinic_limit": "orbit_branches",
+    "branch_dataset": "orbit_datasets", "orbits_dataset": "orbit_datasets", "orbit_from_dataset": "orbit_datasets",
+    # Lyapunov exponents, Poincaré sections, attractors, sweeps
+    "lyapunov_spectrum": "lyapunov", "poincare_section": "poincare", "basins": "attractors.system_problem",
+    "Grid": "attractors.records", "Sweep": "sweeps", "run_sweep": "sweeps",
 }
 
 __all__ = sorted(_PUBLIC)

@@ -72,7 +72,12 @@ def _table_text(ds: xr.Dataset) -> str:
         a = ds.isel(attractor=i)
         kind = kinds[int(a["attractor_kind"])]
         text = f"A{i} {kind}"
-        if kind == "equilibrium":
+        if "attractor_omega" not in ds:  # any System (dynamics.basins): its state names
+            point = ", ".join(f"{n} = {float(v):.6g}" for n, v in zip(ds["state"].values, a["attractor_state"].values))
+            text += f" at ({point})"
+            if float(a["attractor_period"]) > 0:
+                text += f", period {float(a['attractor_period']):.6g}, amplitude {float(a['attractor_amplitude']):.3g}"
+        elif kind == "equilibrium":
             text += (f" {'inverted' if int(a['attractor_branch']) > 0 else 'noninverted'}, stable segment "
                      f"Omega in [{float(a['attractor_segment_min']):.2f}, {float(a['attractor_segment_max']):.2f}]")
         else:
@@ -104,6 +109,9 @@ def basins_figure(ds: xr.Dataset):
         axes[1].plot(ds[x], ds["assignment_time"], ".")
         axes[1].set(xlabel=x, ylabel="time to assignment [s]")
     fracs = ", ".join(f"A{i} {100 * float(f):.1f}%" for i, f in enumerate(ds["basin_fraction"].values))
+    if "system" in ds.attrs:  # any System
+        fig.suptitle(f"Basins of {ds.attrs['system']} ({ds.attrs.get('system_parameters', '')})\n{fracs}", fontsize=10)
+        return fig
     fig.suptitle(f"Basins, {ds.attrs.get('paper_model', '')}, eps = {ds.attrs.get('eps', float('nan')):g} m/s, "
                  f"mu = {ds.attrs.get('mu', float('nan')):g}, horizon {ds.attrs.get('t_end', '')} s "
                  f"({ds.attrs.get('fixed_initial', '')})\n{fracs}", fontsize=10)

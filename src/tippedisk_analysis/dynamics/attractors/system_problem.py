@@ -1,7 +1,7 @@
 """The recurrence problem of any :class:`~tippedisk_analysis.dynamics.System`, and its basins of attraction.
 
     grid = at.Grid(("u1", "u2"), (0.0, 0.0), (1.0, 6.0), (100, 100))
-    ds = dy.basins(ab, {"u1": (0.0, 1.0, 64), "u2": (0.0, 6.0, 64)}, grid=grid, pars=ab.with_pars(D=0.12))
+    ds = dy.basins(ab, grid, {"u1": (0.0, 1.0, 64), "u2": (0.0, 6.0, 64)}, pars=ab.with_pars(D=0.12))
 
 The runs integrate the system in heyoka batch mode (its terminal events end a run and label it), observed
 through the grid's coordinates (states or observables of the system, by name). The result is a dataset of
@@ -173,13 +173,13 @@ def _assemble(system: System, config: dict, results: dict) -> xr.Dataset:
     return xr.Dataset(data, coords=coords, attrs=attrs)
 
 
-def basins(system: System, axes: dict, *, grid: Grid, state=None, pars=None, horizon: float = 100.0,
+def basins(system: System, grid: Grid, axes: dict, *, state=None, pars=None, horizon: float = 100.0,
            recurrence: dict | None = None, tol: float = TOL, batch_size: int = 4, chunk_size: int = 256,
            output=None, threads: int | None = None, scheduler=None, progress: bool = True) -> xr.Dataset:
-    """Basins of attraction of ``system`` over one or two initial states ``axes`` ({state name: (start, stop,
-    n)}), the other states at ``state`` (default zeros), parameters ``pars`` (default the system's), found by
-    recurrences in ``grid`` (a :class:`~tippedisk_analysis.dynamics.attractors.Grid` over states or
-    observables); ``horizon``: the longest run (undecided after it); ``recurrence``: fields of
+    """Basins of attraction of ``system``, found by recurrences in ``grid`` (a
+    :class:`~tippedisk_analysis.dynamics.attractors.Grid` over states or observables), over one or two initial
+    states ``axes`` ({state name: (start, stop, n)}), the other states at ``state`` (default zeros), parameters
+    ``pars`` (default the system's); ``horizon``: the longest run (undecided after it); ``recurrence``: fields of
     :class:`~tippedisk_analysis.dynamics.attractors.RecurrenceSettings`."""
     if not 1 <= len(axes) <= 2:
         raise ParameterError("basins need one or two initial-state ranges, e.g. {'u1': (0, 1, 64)}")
