@@ -1,6 +1,6 @@
 """Periodic orbits: the method on textbook systems, and why the tippedisk with friction has none.
 
-Textbook (analysis/periodic.py, tests/test_periodic.py): the Bautin normal form's branch from its Hopf point
+Textbook (dynamics/, tests/test_periodic.py): the Bautin normal form's branch from its Hopf point
 through the fold of cycles (beta = -1/4), the Roessler branch with its period doubling and the doubled
 branch. The tippedisk (eps = 0.25 and 0.1 m/s, mu = 0.3): Newton from the Hopf point HOPF1 of the inverted
 family, and from the Poincaré returns (beta_dot = 0) of Table 3 runs, with the energy lost per return

@@ -1,4 +1,4 @@
-"""Numerical continuation (analysis/continuation.py, equilibria.py, normal_forms.py, spin_continuation.py).
+"""Numerical continuation (dynamics/continuation.py, equilibria.py, normal_forms.py; analysis/spin_continuation.py).
 
 First on textbook systems with known answers (a fold, a pitchfork and a transcritical branch point,
 Hopf points with known first Lyapunov coefficients, a C^1 Hopf point, a line of equilibria in

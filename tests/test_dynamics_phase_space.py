@@ -4,6 +4,8 @@ with known answers: AUTO-07p's 'ab', the damped double well, the van der Pol osc
 from __future__ import annotations
 
 import math
+import re
+from pathlib import Path
 
 import heyoka as hy
 import numpy as np
@@ -64,6 +66,17 @@ def test_double_well_basins_are_swapped_by_the_symmetry():
     np.testing.assert_array_equal(ds.basin_fraction.values, [0.5, 0.5])
 
 
+def test_van_der_pol_cycle_longer_than_the_locate_window_is_periodic():
+    """mu = 1: the period 6.66 exceeds the default locate window (100 samples of 0.05 = 5 time units); the run
+    goes on until it returns, and the one attractor is the cycle with the literature period."""
+    vdp = dy.textbook_system("vanderpol")
+    grid = dy.Grid(("x", "y"), (-3.0, -4.0), (3.0, 4.0), (60, 80))
+    ds = dy.basins(vdp, grid, {"x": (-2.5, 2.5, 6), "y": (-3.0, 3.0, 6)}, pars=vdp.with_pars(mu=1.0), horizon=300.0,
+                   progress=False)
+    assert ds.sizes["attractor"] == 1 and np.all(ds.outcome.values == 0) and int(ds.attractor_kind[0]) == 1
+    assert float(ds.attractor_period[0]) == pytest.approx(VDP_PERIOD, rel=1e-9)
+
+
 def test_basins_name_a_grid_coordinate_the_system_does_not_have(ab):
     with pytest.raises(ParameterError, match="'w' is neither a state nor an observable of ab"):
         dy.basins(ab, dy.Grid(("u1", "w"), (0, 0), (1, 1), (4, 4)), AB_AXES, progress=False)
@@ -102,3 +115,25 @@ def test_a_section_of_a_quantity_the_system_does_not_have():
         dy.poincare_section(vdp, [2.0, 0.0], "z")
     with pytest.raises(ParameterError, match="direction 'up' unknown"):
         dy.poincare_section(vdp, [2.0, 0.0], "x", direction="up")
+
+
+def test_the_worked_example_of_docs_dynamics_runs_and_says_what_it_shows(tmp_path, monkeypatch):
+    """docs/dynamics.md's Brusselator (a = 1): its code blocks run as printed, and the page's claims hold: the
+    Hopf point at b = 1 + a^2 = 2 with frequency a = 1, stable orbits, the section's return time equal to the
+    shooting period, the Lyapunov exponents (0, Floquet exponent), one periodic attractor with that period."""
+    text = (Path(__file__).resolve().parents[1] / "docs" / "dynamics.md").read_text()
+    monkeypatch.chdir(tmp_path)
+    ns: dict = {}
+    for block in re.findall(r"```python\n(.*?)```", text, re.S):
+        exec(compile(block, "docs/dynamics.md", "exec"), ns)
+    eq, po, ps, ly, at, T = (ns[k] for k in ("eq", "po", "ps", "ly", "at", "T"))
+    assert eq.attrs["labels"] == "HOPF1"
+    i = int(eq.special_index[0])
+    assert float(eq.b[i]) == pytest.approx(2.0, abs=1e-12) and float(eq.special_frequency[0]) == pytest.approx(1.0)
+    assert float(eq.special_l1[0]) < 0 and np.all(po.stability.values == 0)
+    np.testing.assert_allclose(np.diff(ps.time.values), T, atol=1e-10)
+    k = int(po.special_index[list(po.special_label.values).index("UZ1")])
+    mu = po.multiplier_real.values[k][po.multiplier_trivial.values[k] == 0][0]
+    assert abs(float(ly.exponents[0])) < 1e-3 and float(ly.exponents[1]) == pytest.approx(math.log(mu) / T, rel=1e-3)
+    assert at.sizes["attractor"] == 1 and int(at.attractor_kind[0]) == 1
+    assert float(at.attractor_period[0]) == pytest.approx(T, rel=1e-9)

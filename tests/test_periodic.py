@@ -1,4 +1,4 @@
-"""Periodic orbits (analysis/periodic.py): shooting, Floquet multipliers and branches, proven on textbook
+"""Periodic orbits (dynamics/ flows, shooting, orbits, orbit_branches; analysis/orbits.py): shooting, Floquet multipliers and branches, proven on textbook
 systems with exactly known answers or independent measurements; on the tippedisk, the statuses that say
 there is no periodic orbit (docs/periodic_orbits.md)."""
 

@@ -234,6 +234,31 @@ def equilibrium_description(problem: Problem, cand: Candidate, refined: dict) ->
                        refined)
 
 
+def return_lag(grid: Grid, settings: RecurrenceSettings, observed: np.ndarray, times: np.ndarray) -> float | None:
+    """A return: going back from the last sample, past an excursion (> 2 return_distance away), the latest
+    earlier sample within return_distance of it; the lag is (a multiple of) the period. None: no return."""
+    d = np.max(np.abs(grid.difference(observed, observed[:, -1:])), axis=0)
+    far = np.flatnonzero(d[:-1] > 2 * settings.return_distance)
+    if len(far):
+        close = np.flatnonzero(d[: far[-1]] <= settings.return_distance)
+        if len(close):
+            return float(times[-1] - times[close[-1]])
+    return None
+
+
+def periodic_description(problem: Problem, state, pars, guess: float, core: DescribeContext) -> Description | None:
+    """A periodic attractor through ``state`` with period near ``guess`` (refined on a re-integration), or None."""
+    grid = problem.grid
+    ref = core.refine_periodic(state, pars, guess, problem.amplitude_index)
+    if ref is None:
+        return None
+    period, amplitude, ys, ts = ref
+    whole = ys[:, ts <= ts[0] + period * math.floor((ts[-1] - ts[0]) / period)]  # whole periods
+    centroid = _circular_mean(grid, whole)
+    spread = 0.5 * np.ptp(grid.unwrap(whole), axis=1) * grid.widths
+    return Description("periodic", problem.represent(state), centroid, spread, amplitude, period)
+
+
 def describe(problem: Problem, cand: Candidate, core: DescribeContext) -> Description | None:
     """Generic description of a candidate (module docstring: equilibrium / periodic / irregular, or None)."""
     s, grid = core.settings, problem.grid
@@ -248,22 +273,11 @@ def describe(problem: Problem, cand: Candidate, core: DescribeContext) -> Descri
     if converging(s, a1, a2):
         refined = problem.refine_equilibrium(cand.states[:, -1], cand.pars, core)
         return None if refined is None else equilibrium_description(problem, cand, refined)
-    # a return: going back from the last sample, past an excursion (> 2 return_distance away), the
-    # latest earlier sample within return_distance of it; the lag is (a multiple of) the period
-    d = np.max(np.abs(grid.difference(cand.observed, cand.observed[:, -1:])), axis=0)
-    far = np.flatnonzero(d[:-1] > 2 * s.return_distance)
-    if len(far):
-        close = np.flatnonzero(d[: far[-1]] <= s.return_distance)
-        if len(close):
-            guess = float(cand.times[-1] - cand.times[close[-1]])
-            ref = core.refine_periodic(cand.states[:, -1], cand.pars, guess, problem.amplitude_index)
-            if ref is not None:
-                period, amplitude, ys, ts = ref
-                whole = ys[:, ts <= ts[0] + period * math.floor((ts[-1] - ts[0]) / period)]  # whole periods
-                centroid = _circular_mean(grid, whole)
-                spread = 0.5 * np.ptp(grid.unwrap(whole), axis=1) * grid.widths
-                return Description("periodic", problem.represent(cand.states[:, -1]), centroid, spread, amplitude,
-                                   period)
+    lag = return_lag(grid, s, cand.observed, cand.times)
+    if lag is not None:
+        desc = periodic_description(problem, cand.states[:, -1], cand.pars, lag, core)
+        if desc is not None:
+            return desc
     amplitude = 0.5 * float(np.ptp(yu[problem.amplitude_index, h:])) * grid.widths[problem.amplitude_index]
     return Description("irregular", problem.represent(cand.states[:, -1]), centroid, spread, amplitude, -1.0)
 

@@ -26,12 +26,13 @@ from .. import sweeps
 from ..datasets import flag_attrs
 from ..system import System
 from .mapping import map_points
-from .problem import Problem, describe, equilibrium_description
+from .problem import Problem, describe, equilibrium_description, periodic_description, return_lag
 from .records import BASE_KINDS, Candidate, Description, Grid, RecurrenceSettings
 from .tables import assemble_table, chunk_result, column_names
 
 TOL = 1e-10  # Taylor tolerance of the runs: classifications, not trajectories to round-off
 NEWTON_STEPS = 30  # Newton iterations towards the equilibrium of a contracting spiral
+LONG_WINDOWS = 10  # an irregular candidate's run goes on this many locate windows in search of a return
 
 
 class SystemProblem(Problem):
@@ -50,16 +51,30 @@ class SystemProblem(Problem):
                                      f"{system.name} ({', '.join((*system.state_names, *system.observables))})")
 
     def describe(self, candidate: Candidate, core) -> Description | None:
-        """The generic description (:func:`.problem.describe`), and a slowly contracting spiral recognised as
-        its equilibrium: where the window is too short for the spreads to show the decay, Newton's method from
-        the samples' mean finds an equilibrium x*; it is the attractor if it is linearly stable and the
-        samples approach it in the Lyapunov function V = (x - x*)^T P (x - x*) of its linearisation
-        (A^T P + P A = -I): V at the end below half its value at the start, and below it over each half."""
+        """The generic description (:func:`.problem.describe`), with two checks for what a window of the
+        settings' length (which knows no time scale of the system) can miss before a candidate is called
+        irregular:
+
+        * a slowly contracting spiral is its equilibrium: Newton's method from the samples' mean finds an
+          equilibrium x*; it is the attractor if it is linearly stable and the samples approach it in the
+          Lyapunov function V = (x - x*)^T P (x - x*) of its linearisation (A^T P + P A = -I): V at the end
+          below half its value at the start, and below it over each half;
+        * an orbit longer than the window: the run goes on for up to LONG_WINDOWS windows and a return
+          (:func:`.problem.return_lag`) makes it a periodic attractor with the refined period."""
         desc = describe(self, candidate, core)
-        if desc is None or desc.kind == "equilibrium":
+        if desc is None or desc.kind != "irregular":
             return desc
         x = self._contracting_equilibrium(candidate)
-        return desc if x is None else equilibrium_description(self, candidate, {"state": x})
+        if x is not None:
+            return equilibrium_description(self, candidate, {"state": x})
+        s = core.settings
+        times = s.dt * np.arange(LONG_WINDOWS * candidate.times.size + 1)
+        states = core.sample(candidate.states[:, -1], candidate.pars, times)
+        if states is None:
+            return desc
+        lag = return_lag(self.grid, s, self.observe(states, np.asarray(candidate.pars)), times)
+        periodic = None if lag is None else periodic_description(self, states[:, -1], candidate.pars, lag, core)
+        return desc if periodic is None else periodic
 
     def _contracting_equilibrium(self, candidate: Candidate) -> np.ndarray | None:
         from scipy.linalg import solve_continuous_lyapunov
