@@ -210,12 +210,19 @@ def test_two_writers_to_one_output_both_finish(tmp_path, args):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["c.nc"]  # no chunk directory, no temporary file
 
 
+def _as_from_a_terminal():
+    """In the child before exec: SIGINT to its default, as a command typed at a terminal has it (a suite
+    started in the background by a non-interactive shell inherits SIGINT ignored, and Python then never
+    raises KeyboardInterrupt)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 class _Running:
     """A command started in the background whose stderr is collected as it arrives."""
 
     def __init__(self, args, cwd, runner=CLI):
         self.proc = subprocess.Popen([*runner, *args], cwd=cwd, env=ENV, stdout=subprocess.PIPE,
-                                     stderr=subprocess.PIPE)
+                                     stderr=subprocess.PIPE, preexec_fn=_as_from_a_terminal)
         self._err = bytearray()
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()
