@@ -16,9 +16,20 @@ if [ ! -e "$stamp" ]; then
     .venv/bin/python -m pip install --quiet --disable-pip-version-check -e ".[test]"
     rm -f .venv/.installed-* && touch "$stamp"
 fi
+# the CF checker of the slow tests (tests/test_cf.py): cfchecker in its own venv (it pins its own numpy),
+# UDUNITS-2 from Debian
+cf_checker() {
+    if ! ldconfig -p | grep -q libudunits2.so.0; then
+        apt-get install -y -qq libudunits2-0 >/dev/null || { apt-get update -qq && apt-get install -y -qq libudunits2-0 >/dev/null; }
+    fi
+    if [ ! -x .venv/cfchecker/bin/cfchecks ]; then
+        "$PYTHON" -m venv .venv/cfchecker
+        .venv/cfchecker/bin/python -m pip install --quiet --disable-pip-version-check cfchecker==4.1.0
+    fi
+}
 case "${1:-demo}" in
     demo) .venv/bin/tippedisk study fig13_ode_inversion --output-dir output ;;
     test) shift; .venv/bin/python -m pytest "$@" ;;
-    test-all) shift; .venv/bin/python -m pytest --slow "$@" ;;
+    test-all) shift; cf_checker; .venv/bin/python -m pytest --slow "$@" ;;
     *) echo "usage: bash run.sh [demo|test|test-all [pytest args]]" >&2; exit 2 ;;
 esac

@@ -19,7 +19,7 @@ def test_lorenz_spectrum_to_two_decimals():
     np.testing.assert_allclose(ds.exponents.values, [0.9056, 0.0, -14.5723], atol=5e-3)
     assert float(ds.exponent_sum) == pytest.approx(-(10 + 1 + 8 / 3), abs=1e-6)  # constant divergence
     assert float(ds.divergence_mean) == pytest.approx(-(10 + 1 + 8 / 3), rel=1e-12)
-    h = ds.history.values[:, 0]
+    h = ds.running_exponents.values[:, 0]
     assert abs(h[-1] - 0.9056) < abs(h[len(h) // 20] - 0.9056) + 1e-3  # the history converges
 
 

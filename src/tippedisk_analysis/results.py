@@ -1,10 +1,22 @@
 """The dataset schema: names, units, long names, and the netCDF round trip.
 
-Every variable carries ``units`` and ``long_name``; the dataset carries the
-configuration that produced it as a JSON string (``config``), the package version,
-and ``status`` / ``message`` saying how the run ended. netCDF-safe throughout: no
-complex dtype, no bool or None attributes, categories as int8 with
+Every variable carries ``long_name`` and ``units`` (UDUNITS; "1" for dimensionless quantities and
+indices; none only where the values along a label dimension mix units, which a ``comment`` and a
+``<dim>_units`` coordinate say); the dataset carries the configuration that produced it as a JSON
+string (``config``), the package version, and ``status`` / ``message`` saying how the run ended.
+netCDF-safe throughout: no complex dtype, no bool or None attributes, categories as int8 with
 ``flag_values`` / ``flag_meanings``. A dataset holding a non-finite value is refused.
+
+On disk (:func:`encode`, CF-1.8; :func:`decode` undoes it on :func:`load`):
+
+* text is a fixed-width character array (dimension ``<name>_strlen``, UTF-8): what every netCDF reader
+  and the CF checker understand, where netCDF-4 variable-length strings are not;
+* a dimension labelled by text (``branch``, ``state``, ``label``, ...) has no coordinate variable (CF
+  1.3: coordinate variables are numeric and monotonic); its labels are the auxiliary coordinate
+  ``<dim>_label`` (CF 6.1), and the global attribute ``label_dimensions`` lists such dimensions, so
+  that :func:`load` gives them back as the index (``ds.sel(branch="inverted")`` works as before);
+* index coordinates (:func:`index_coordinate`) carry ``units = "1"``, and no variable has a ``_FillValue``
+  (no missing values are ever stored).
 
 Simulation statuses: ``completed`` (reached t_end); ``fell`` (the disk tilted down to the
 fall angle, sin(beta) -> 0, the Euler singularity, and the run ended there); ``not_converged``
@@ -80,6 +92,11 @@ VARIABLES: dict[str, tuple[str, str]] = {
     "prox_iterations_mean": ("1", "mean number of prox iterations per step in the storage interval"),
 }
 
+def index_coordinate(dim: str, n: int, long_name: str) -> tuple:
+    """The coordinate 0, 1, ..., n - 1 of dimension ``dim`` (an index: dimensionless, int32)."""
+    return (dim, np.arange(n, dtype=np.int32), {"units": "1", "long_name": long_name})
+
+
 def describe(ds: xr.Dataset) -> xr.Dataset:
     """Attach units and long_name to every known variable and coordinate (in place; returns ``ds``)."""
     for name, var in ds.variables.items():
@@ -143,6 +160,70 @@ def config_of(ds: xr.Dataset) -> dict:
     return json.loads(ds.attrs["config"])
 
 
+LABEL_DIMENSIONS = "label_dimensions"
+"""Global attribute: the dimensions whose text labels are stored as the auxiliary coordinate <dim>_label."""
+
+
+def _is_text(var) -> bool:
+    return var.dtype.kind in "USO"
+
+
+def encode(ds: xr.Dataset) -> tuple[xr.Dataset, dict]:
+    """The on-disk (CF-1.8) form of ``ds`` and its netCDF encoding (module docstring)."""
+    out = ds.copy()
+    relabelled = []
+    for dim in list(ds.dims):
+        if dim in ds.coords and _is_text(ds[dim]):
+            label = f"{dim}_label"
+            if label in ds.variables:
+                raise DatasetError(f"the dataset holds both a text dimension {dim!r} and a variable {label!r}; "
+                                   f"rename {label!r}")
+            var = ds[dim].variable.to_base_variable()
+            out = out.drop_vars(dim).assign_coords({label: var})
+            relabelled.append(dim)
+    if relabelled:
+        out.attrs[LABEL_DIMENSIONS] = " ".join(relabelled)
+    encoding = {}
+    for name, var in out.variables.items():
+        if _is_text(var):
+            if var.dtype.kind == "O":
+                out[name] = var.astype(str)
+            encoding[name] = {"dtype": "S1", "char_dim_name": f"{name}_strlen"}
+            continue
+        enc = {"_FillValue": None}
+        if np.issubdtype(var.dtype, np.number) and name in out.data_vars:
+            enc.update(zlib=True, complevel=4)
+        encoding[name] = enc
+    return out, encoding
+
+
+RENAMED = {("lyapunov", "history"): "running_exponents"}
+"""Variables renamed since older files were written: (kind, old name) -> name (a 2-D ``history`` shared its
+name with its dimension, which CF 1.8 reserves for coordinate variables)."""
+
+
+def decode(ds: xr.Dataset) -> xr.Dataset:
+    """The in-memory form of a dataset read from disk: text labels back as the index of their dimension, the
+    names of :data:`RENAMED` for files written before."""
+    for (kind, old), new in RENAMED.items():
+        if ds.attrs.get("kind") == kind and old in ds.variables and old not in ds.indexes and new not in ds.variables:
+            ds = ds.rename_vars({old: new})
+            if new in ds.coords:  # read as a coordinate: it had its dimension's name
+                ds = ds.reset_coords(new)
+    dims = str(ds.attrs.get(LABEL_DIMENSIONS, "")).split()
+    for dim in dims:
+        label = f"{dim}_label"
+        if label in ds.variables:
+            var = ds[label].variable.to_base_variable().astype(str)  # netCDF char arrays read as objects
+            ds = ds.drop_vars(label).assign_coords({dim: var})
+    for name, var in ds.variables.items():
+        if var.dtype.kind == "O" and name not in ds.indexes:
+            ds[name] = var.astype(str)
+    if dims:
+        ds.attrs = {k: v for k, v in ds.attrs.items() if k != LABEL_DIMENSIONS}
+    return ds
+
+
 def save(ds: xr.Dataset, path: str | os.PathLike, *, overwrite: bool = True) -> Path:
     """Write ``ds`` as compressed netCDF4 atomically (:func:`tippedisk_analysis.files.atomic_write`).
 
@@ -156,9 +237,8 @@ def save(ds: xr.Dataset, path: str | os.PathLike, *, overwrite: bool = True) -> 
         raise DatasetError(f"path = {path!r} is a {type(path).__name__}; give a file name such as 'run.nc'")
     check_finite(ds)
     path = files.check_output(path, overwrite=overwrite)
-    encoding = {name: {"zlib": True, "complevel": 4} for name, var in ds.data_vars.items()
-                if np.issubdtype(var.dtype, np.number)}
-    return files.atomic_write(path, lambda tmp: ds.to_netcdf(tmp, engine="netcdf4", encoding=encoding))
+    stored, encoding = encode(ds)
+    return files.atomic_write(path, lambda tmp: stored.to_netcdf(tmp, engine="netcdf4", encoding=encoding))
 
 
 def load(path: str | os.PathLike) -> xr.Dataset:
@@ -181,4 +261,4 @@ def load(path: str | os.PathLike) -> xr.Dataset:
                            "give a .nc file written by tippedisk") from None
     if ds.attrs.get("producer") != PRODUCER or "kind" not in ds.attrs:
         raise DatasetError(f"'{shown}' was not written by tippedisk_analysis; give a .nc file written by tippedisk")
-    return ds
+    return decode(ds)

@@ -41,6 +41,8 @@ from .reduced import full_from_reduced, reduced_from_full
 
 MODEL = ode.EULER
 PROJECTION = ("beta", "gamma", "alpha_dot")  # names the observe() cfunc can give: + beta_dot, gamma_dot
+PROJECTION_UNITS = {"beta": "rad", "gamma": "rad", "alpha_dot": "rad s-1", "beta_dot": "rad s-1",
+                    "gamma_dot": "rad s-1"}
 KINDS = ("equilibrium", "periodic", "irregular", "rolling", "wobbling")
 DRIFT_TOL = 1e-5  # 1/s: |relative energy change rate| above which an oscillation is a dissipating transient
 EXTRA_NAMES = ("branch", "omega", "omega_min", "omega_max", "max_real_eig", "stationary_deviation",

@@ -11,11 +11,13 @@ import numpy as np
 
 from ..defaults import MAP_TOL
 from ..dynamics import attractors as at
+from ..dynamics.datasets import label_coordinates, mixed_units
 from ..models import ode
 from . import stationary as st
-from .attractor_problem import (EXTRA_NAMES, KINDS, MODEL, PROJECTION, DEFAULT_RECURRENCE, TippediskProblem,
-                                default_grid, evaluate_observables, integrator, observables)
+from .attractor_problem import (DEFAULT_RECURRENCE, EXTRA_NAMES, KINDS, MODEL, PROJECTION, PROJECTION_UNITS,
+                                TippediskProblem, default_grid, evaluate_observables, integrator, observables)
 from .reduced import STATE_NAMES as REDUCED_NAMES
+from .reduced import STATE_UNITS
 
 # ------------------------------------------------------------------ runs of many points (sweeps)
 MATCH_THRESHOLD = 1.0  # TippediskProblem.distance: alpha_dot cells between stable segments; cells otherwise
@@ -158,19 +160,21 @@ def attractor_table(cols: dict, groups, threshold: float = MATCH_THRESHOLD):
                                                          "attractor's cells from its centroid"}),
         "attractor_state": (("attractor", "reduced_state"),
                             np.array([d.representative for d in table], dtype=float).reshape(n, len(REDUCED_NAMES)),
-                            {"units": "SI", "long_name": "representative reduced state (a state on the attractor; "
-                                                         "equilibria: the Newton-refined spin)"}),
+                            mixed_units("representative reduced state (a state on the attractor; equilibria: the "
+                                        "Newton-refined spin)", "reduced_state")),
         "attractor_centroid": (("attractor", "projection"),
                                np.array([d.centroid for d in table], dtype=float).reshape(n, len(PROJECTION)),
-                               {"units": "SI", "long_name": "mean of the observed coordinates on the attractor"}),
+                               mixed_units("mean of the observed coordinates on the attractor", "projection")),
         "attractor_n_points": (("attractor",), counts, {"units": "1", "long_name": "runs assigned to it"}),
     }
     return outcome.astype(np.int16), dv, table
 
 
 def table_coords() -> dict:
-    return {"reduced_state": ("reduced_state", list(REDUCED_NAMES), {"long_name": "reduced state (analysis/reduced)"}),
-            "projection": ("projection", list(PROJECTION), {"long_name": "observed coordinates of the cell grid"})}
+    return {**label_coordinates("reduced_state", REDUCED_NAMES, [STATE_UNITS[n] for n in REDUCED_NAMES],
+                                "reduced state (analysis/reduced)"),
+            **label_coordinates("projection", PROJECTION, [PROJECTION_UNITS[n] for n in PROJECTION],
+                                "observed coordinates of the cell grid")}
 
 
 def warm_up(tol: float, batch_size: int) -> None:

@@ -18,7 +18,7 @@ from ..errors import ParameterError
 from ..models import ode
 from ..parameters import Disk, Friction, InitialState, Setup, to_dict
 from ..ranges import parse_range
-from ..results import describe as describe_units
+from ..results import describe as describe_units, index_coordinate
 from ..results import make_attrs
 from .attractor_problem import (DEFAULT_GRID, DEFAULT_RECURRENCE, EXTRA_NAMES, KINDS, MODEL, PROJECTION,  # noqa: F401
                                 TippediskProblem, default_grid, evaluate_observables, integrator, observables,
@@ -199,7 +199,7 @@ def assemble_basins(cfg: BasinConfig, results: dict) -> xr.Dataset:
     data["label_fraction"] = (("label",), special, {"units": "1", "long_name": "share of the runs with this label"})
     coords = {name: (name, values, {"units": INITIAL[name][0], "long_name": INITIAL[name][1]})
               for name, values in axes.items()}
-    coords["attractor"] = ("attractor", np.arange(len(table)), {"long_name": "attractor id"})
+    coords["attractor"] = index_coordinate("attractor", len(table), "attractor id")
     coords["label"] = ("label", list(SPECIAL_ORDER), {"long_name": "labels of runs without an attractor"})
     coords.update(table_coords())
     message = summary(outcome, table, cfg.n_points, cfg.t_end)
@@ -355,8 +355,8 @@ def assemble_fractions(cfg: FractionsConfig, results: dict) -> xr.Dataset:
                                                    "long_name": "sampled " + INITIAL[name][1]})
     units, long_name = (INITIAL[par][:2] if par in INITIAL else PARAMETERS[par])
     coords = {par: (par, values, {"units": units, "long_name": long_name}),
-              "sample": ("sample", np.arange(S), {"long_name": "sampled initial condition"}),
-              "attractor": ("attractor", np.arange(n_att), {"long_name": "attractor id (matched across " + par + ")"}),
+              "sample": index_coordinate("sample", S, "sampled initial condition"),
+              "attractor": index_coordinate("attractor", n_att, "attractor id (matched across " + par + ")"),
               "label": ("label", list(SPECIAL_ORDER), {"long_name": "labels of runs without an attractor"})}
     coords.update(table_coords())
     share = data["inverted_fraction"][1]

@@ -67,7 +67,7 @@ def textbook_spectrum(name: str, state, *, t_end: float = 1000.0, dt: float = 1.
     system = textbook_system(name)
     result = spectrum(system, state, system.with_pars(**pars), t_end=t_end, dt=dt, transient=transient, tol=tol)
     return spectrum_dataset(result, system, {"state0": list(map(float, state)), "t_end": t_end, "dt": dt,
-                                             "transient": transient, "tol": tol, "pars": pars}, "time unit")
+                                             "transient": transient, "tol": tol, "pars": pars})
 
 
 # ============================================================================ maps over (Omega, eps)

@@ -29,7 +29,7 @@ from ..ranges import check_axis
 from ..resources import check_memory
 from ..models import ode
 from ..parameters import Setup, eccentricity_columns, to_dict
-from ..results import make_attrs
+from ..results import index_coordinate, make_attrs
 from . import reduced, stability
 from . import stationary as st
 
@@ -169,7 +169,7 @@ def stability_map(omega, eps, *, mu=None, e=None, setup: Setup | None = None,
             **{name: (name, values, {"units": SWEEPABLE[name][0], "long_name": SWEEPABLE[name][1],
                                      **({"comment": setup.disk.eccentricity_rule} if name == "e" else {})})
                for name, values in sweeps.items()},
-            "eig": ("eig", np.arange(stability.N_EIG, dtype=np.int32), {"long_name": "eigenvalue index (by real part)"}),
+            "eig": index_coordinate("eig", stability.N_EIG, "eigenvalue index (by real part)"),
         },
     )
     n_found = 0
@@ -248,7 +248,7 @@ def critical_speeds(ds: xr.Dataset, *, setup: Setup | None = None, slip_smoothin
             "comment": "0: a real eigenvalue crosses zero; > 0: a complex pair crosses (Hopf); 0 for padding"}),
         "n_critical": (("branch", *other), counts, {
             "units": "1", "long_name": "number of critical spin speeds found in the omega range"}),
-    }, coords={"crossing": ("crossing", np.arange(n_max, dtype=np.int32), {"long_name": "critical speed index"})})
+    }, coords={"crossing": index_coordinate("crossing", n_max, "critical speed index")})
 
 
 def _roots(branch: str, omega: np.ndarray, mre: np.ndarray, pars: np.ndarray) -> list[tuple[float, int, float]]:

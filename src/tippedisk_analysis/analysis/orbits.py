@@ -27,6 +27,7 @@ from ..dynamics.system import System
 from ..errors import ParameterError
 from ..models import ode
 from ..parameters import Disk, Friction, Setup, to_dict
+from ..results import index_coordinate
 from . import reduced
 
 TIPPEDISK_SCALE = reduced.STATE_SCALE
@@ -192,7 +193,7 @@ def tippedisk_orbits_from_run(run: xr.Dataset, *, crossing: int = -2, section: s
     cfg = {"source": "run", "run_config": config, "section": section, "crossing": int(k),
            "setup": to_dict(setup), "model_used": "ode-euler"}
     ds = orbits_dataset([orbit], status, message, cfg, extra=extra)
-    ds = ds.assign_coords(crossing=("crossing", np.arange(n, dtype=np.int32), {"long_name": "crossing index"}))
+    ds = ds.assign_coords(crossing=index_coordinate("crossing", n, "crossing index"))
     return ds
 
 
@@ -286,8 +287,9 @@ def tippedisk_lyapunov_family(setup, branch: str = "inverted", omega: float = 40
 
 
 def tippedisk_branch_dataset(prob: ShootingProblem, br: continuation.Branch, info: dict | None = None) -> xr.Dataset:
-    """:func:`~tippedisk_analysis.dynamics.orbit_datasets.branch_dataset` of a tippedisk branch with ``valid`` per orbit: lambda_N > 0 all along it (the
-    bilateral contact model holds); orbits with lambda_N < 0 somewhere would lift off."""
+    """:func:`~tippedisk_analysis.dynamics.orbit_datasets.branch_dataset` of a tippedisk branch with ``valid``
+    per orbit: lambda_N > 0 all along it (the bilateral contact model holds); orbits with lambda_N < 0 somewhere
+    would lift off."""
     ds = branch_dataset(prob, br, info)
     lam = ds.observable_min.sel(observable="lambda_N").values
     valid = (lam > 0).astype(np.int8)

@@ -49,7 +49,7 @@ import xarray as xr
 from ..dynamics import sweeps
 from ..errors import ParameterError
 from ..models import ode
-from ..results import describe, make_attrs
+from ..results import describe, index_coordinate, make_attrs
 from . import basins
 from . import outcome_rules as rules
 from .outcome_config import FILL_TIME, INITIAL_AXES, MODEL, OUTCOMES, SWEEPABLE, MapConfig, prepare
@@ -201,7 +201,7 @@ def _assemble_attractors(config: MapConfig, results: dict) -> xr.Dataset:
     coords = {name: (name, values, {"units": SWEEPABLE[name][0], "long_name": SWEEPABLE[name][1],
                                     **({"comment": config.base_setup().disk.eccentricity_rule} if name == "e" else {})})
               for name, values in axes.items()}
-    coords["attractor"] = ("attractor", np.arange(len(table)), {"long_name": "attractor id"})
+    coords["attractor"] = index_coordinate("attractor", len(table), "attractor id")
     coords.update(basins.table_coords())
     message = basins.summary(outcome, table, config.n_points, config.t_end)
     status = "partial" if np.any(outcome == basins.labels()["failed"]) else "completed"

@@ -36,7 +36,7 @@ from ..defaults import FALL_ANGLE, SLIP_SMOOTHING, TAYLOR_TOL
 from ..models import ode
 from ..models.variables import quantities
 from ..parameters import InitialState, Setup, to_dict
-from ..results import describe, make_attrs
+from ..results import describe, index_coordinate, make_attrs
 
 DIRECTIONS = ("positive", "negative", "any")
 LEVEL_INDEX = len(ode.PARAMETER_NAMES)  # hy.par index of the section level
@@ -272,7 +272,7 @@ def poincare_section(section: str | Section = "beta_dot=0", *, direction: str = 
     ds = xr.Dataset(
         {"time": ("crossing", cr.times.astype(float)),
          **{k: ("crossing", np.asarray(v, dtype=float)) for k, v in data.items()}},
-        coords={"crossing": np.arange(n, dtype=np.int64)},
+        coords={"crossing": index_coordinate("crossing", n, "crossing index")},
         attrs=make_attrs("poincare", config, cr.status, cr.message, model=model_name, paper_model=m.paper_name,
                          section=sec.label, direction=sec.direction, n_crossings=n, t_final=cr.t_final,
                          n_steps=cr.n_steps, valid=int(cr.lift_off_time is None),

@@ -124,7 +124,7 @@ def system(frictionless: bool = False) -> System:
     return System("tippedisk_reduced" + ("_frictionless" if frictionless else ""), red.variables, red.rhs,
                   dict(zip(ode.PARAMETER_NAMES, defaults)), state_names=STATE_NAMES, state_scale=STATE_SCALE,
                   observables=observables, integrals=integrals, events=events, n_trivial=3 if frictionless else 2,
-                  units=STATE_UNITS, compact_mode=True,
+                  units={**STATE_UNITS, **ode.PARAMETER_UNITS}, time_units="s", compact_mode=True,
                   description="reduced tippedisk, ODE Model 1 (" + ("frictionless: conservative" if frictionless
                               else "smooth Coulomb friction") + ", bilateral contact)")
 

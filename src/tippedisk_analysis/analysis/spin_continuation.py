@@ -30,7 +30,7 @@ from ..defaults import SLIP_SMOOTHING
 from ..errors import DatasetError, ParameterError
 from ..models import ode
 from ..parameters import Setup, to_dict
-from ..results import config_of, make_attrs
+from ..results import config_of, index_coordinate, make_attrs
 from ..dynamics import continuation
 from ..dynamics.datasets import SPECIAL_KINDS
 from ..dynamics.equilibria import EquilibriumProblem, Parameter
@@ -224,10 +224,9 @@ def branch_dataset(br: continuation.Branch, prob: EquilibriumProblem, setup: Set
                        "a neutral saddle (a real pair s, -s: no bifurcation)"})
     data.update(_special_table(br, prob, setup))
     ds = xr.Dataset(data, coords={
-        "point": ("point", np.arange(len(u), dtype=np.int32), {"long_name": "point along the branch"}),
-        "eig": ("eig", np.arange(ev.shape[1], dtype=np.int32), {"long_name": "eigenvalue index"}),
-        "special_point": ("special_point", np.arange(len(br.special_points), dtype=np.int32),
-                          {"long_name": "special point index"})})
+        "point": index_coordinate("point", len(u), "point along the branch"),
+        "eig": index_coordinate("eig", ev.shape[1], "eigenvalue index"),
+        "special_point": index_coordinate("special_point", len(br.special_points), "special point index")})
     for name in reduced.STATE_NAMES:
         ds[name].attrs.update(_STATE_ATTRS[name])
     config = {"setup": to_dict(setup), **info, "critical": prob.critical or "", "free": [p.name for p in prob.free],
@@ -278,7 +277,7 @@ def _special_table(br, prob, setup) -> dict:
         "special_label": ("special_point", np.array([sp.label for sp in sps], dtype=str),
                           {"long_name": "label, e.g. HOPF1 (tippedisk continue --from-point FILE:LABEL)"}),
         "special_index": ("special_point", np.array([sp.index for sp in sps], dtype=np.int32),
-                          {"long_name": "index of the special point along dim point"}),
+                          {"units": "1", "long_name": "index of the special point along dim point"}),
         "special_value": ("special_point", np.array([sp.value for sp in sps]),
                           {"long_name": "test function at the located point: the critical eigenvalue's real part "
                                         "[1/s] for Hopf and zero-eigenvalue points, the tangent component for folds, "

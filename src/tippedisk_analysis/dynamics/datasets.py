@@ -17,7 +17,7 @@ import numpy as np
 import xarray as xr
 
 from ..errors import DatasetError, ParameterError
-from ..results import make_attrs
+from ..results import index_coordinate, make_attrs
 from . import spectra
 from .continuation import Branch
 from .system import System
@@ -32,7 +32,25 @@ def flag_attrs(long_name: str, flags: dict) -> dict:
             "flag_meanings": " ".join(k or "none" for k in flags)}
 
 
-def special_table(br: Branch, kinds: dict = SPECIAL_KINDS) -> dict:
+def label_coordinates(dim: str, names, units, long_name: str) -> dict:
+    """The text labels of dimension ``dim`` and their UDUNITS units, ``<dim>_units`` (values along such a
+    dimension mix units: variables over it carry :func:`mixed_units` instead of a ``units`` attribute)."""
+    return {dim: (dim, np.array(list(names), dtype=str), {"long_name": long_name}),
+            f"{dim}_units": (dim, np.array(list(units), dtype=str), {"long_name": f"units of each {dim}"})}
+
+
+def state_coordinates(system: System, names=None) -> dict:
+    """``state`` and ``state_units`` of ``system`` (or of its states ``names``)."""
+    names = system.state_names if names is None else tuple(names)
+    return label_coordinates("state", names, [system.units_of(n) for n in names], "state variable")
+
+
+def mixed_units(long_name: str, dim: str = "state") -> dict:
+    """Attributes of a variable whose values along ``dim`` have different units (CF has no per-element units)."""
+    return {"long_name": long_name, "comment": f"the units differ along {dim}: see the coordinate {dim}_units"}
+
+
+def special_table(br: Branch, system: System, kinds: dict = SPECIAL_KINDS) -> dict:
     """The special points of a branch as data variables along ``special_point``."""
     sps = br.special_points
     return {
@@ -41,13 +59,14 @@ def special_table(br: Branch, kinds: dict = SPECIAL_KINDS) -> dict:
         "special_label": ("special_point", np.array([sp.label for sp in sps], dtype=str),
                           {"long_name": "label, e.g. HOPF1 (a start for special_point_curve or orbit_branch)"}),
         "special_index": ("special_point", np.array([sp.index for sp in sps], dtype=np.int32),
-                          {"long_name": "index of the special point along dim point"}),
+                          {"units": "1", "long_name": "index of the special point along dim point"}),
         "special_value": ("special_point", np.array([sp.value for sp in sps]),
                           {"long_name": "test function at the located point: the critical eigenvalue's real part for "
-                                        "Hopf and zero-eigenvalue points, the tangent component for folds"}),
+                                        "Hopf and zero-eigenvalue points, the tangent component for folds",
+                           "comment": f"units: {system.per_time()} (eigenvalues), 1 (tangent components)"}),
         "special_frequency": ("special_point", np.array([float(sp.data.get("frequency", 0.0)) for sp in sps]),
                               {"long_name": "frequency |Im s| of the critical pair (Hopf), 0 otherwise",
-                               "units": "rad per time unit"}),
+                               "units": system.per_time("rad")}),
         "special_l1": ("special_point", np.array([float(sp.data.get("l1", 0.0)) for sp in sps]),
                        {"long_name": "first Lyapunov coefficient of Hopf points (< 0 supercritical, > 0 subcritical)"}),
     }
@@ -65,29 +84,31 @@ def continuation_dataset(br: Branch, prob, info: dict | None = None) -> xr.Datas
     data = {name: ("point", u[:, i], {"units": system.units.get(name, "1"), "long_name": f"state {name}"})
             for i, name in enumerate(system.state_names)}
     for j, name in enumerate(system.parameter_names):
-        data[name] = ("point", pars[:, j], {"units": "1", "long_name": f"parameter {name}"})
+        data[name] = ("point", pars[:, j], {"units": system.units_of(name), "long_name": f"parameter {name}"})
     for p, column in zip(prob.free, u[:, n:].T):  # free unknowns that are not runtime parameters (pins)
         if p.name not in data:
             data[p.name] = ("point", column, {"units": "1", "long_name": f"continuation parameter {p.name}"})
     data.update({
-        "eig_real": (("point", "eig"), ev.real, {"units": "1", "long_name": "real part of the eigenvalues, "
-                                                 "descending"}),
-        "eig_imag": (("point", "eig"), ev.imag, {"units": "1", "long_name": "imaginary part of the eigenvalues"}),
+        "eig_real": (("point", "eig"), ev.real, {"units": system.per_time(), "long_name": "real part of the "
+                                                 "eigenvalues, descending"}),
+        "eig_imag": (("point", "eig"), ev.imag, {"units": system.per_time(), "long_name": "imaginary part of the "
+                                                 "eigenvalues"}),
         "n_unstable": ("point", n_unstable, {"units": "1", "long_name": "eigenvalues with positive real part"}),
         "stability": ("point", stab, flag_attrs("linear stability", spectra.STABILITY_FLAGS)),
-        "max_real_eig": ("point", max_re, {"units": "1", "long_name": "largest real part of the eigenvalues"}),
+        "max_real_eig": ("point", max_re, {"units": system.per_time(), "long_name": "largest real part of the "
+                                           "eigenvalues"}),
         "arclength": ("point", br.array("arclength"), {"units": "1", "long_name": "pseudo-arclength in scaled "
                                                        "unknowns (u / scale)"}),
-        "residual": ("point", residual, {"units": "1", "long_name": "max |right-hand side| at the point"}),
+        "residual": ("point", residual, {"long_name": "max |right-hand side| at the point",
+                                         "comment": "the largest component, in its state's units per time"}),
         "newton_iterations": ("point", br.array("newton_iterations").astype(np.int32),
                               {"units": "1", "long_name": "corrector iterations"}),
     })
-    data.update(special_table(br))
+    data.update(special_table(br, system))
     ds = xr.Dataset(data, coords={
-        "point": ("point", np.arange(len(u), dtype=np.int32), {"long_name": "point along the branch"}),
-        "eig": ("eig", np.arange(ev.shape[1], dtype=np.int32), {"long_name": "eigenvalue index"}),
-        "special_point": ("special_point", np.arange(len(br.special_points), dtype=np.int32),
-                          {"long_name": "special point index"})})
+        "point": index_coordinate("point", len(u), "point along the branch"),
+        "eig": index_coordinate("eig", ev.shape[1], "eigenvalue index"),
+        "special_point": index_coordinate("special_point", len(br.special_points), "special point index")})
     free = [p.name for p in prob.free]
     labels = ", ".join(f"{sp.label} at " + ", ".join(f"{name} = {sp.u[n + j]:.8g}" for j, name in enumerate(free))
                        for sp in br.special_points)

@@ -31,7 +31,8 @@ import numpy as np
 import xarray as xr
 
 from ..errors import ParameterError
-from ..results import make_attrs
+from ..results import index_coordinate, make_attrs
+from .datasets import mixed_units, state_coordinates
 from .system import System
 
 TOL = 1e-12
@@ -139,27 +140,27 @@ def spectrum(system: System, state, pars=None, *, n_exponents: int | None = None
                           float(ta.time), div_mean, np.array(ta.state[:n]))
 
 
-def spectrum_dataset(result: LyapunovResult, system: System, config: dict, time_units: str = "s") -> xr.Dataset:
-    """A run's spectrum as a dataset of kind ``lyapunov`` (dims exponent, history)."""
+def spectrum_dataset(result: LyapunovResult, system: System, config: dict) -> xr.Dataset:
+    """A run's spectrum as a dataset of kind ``lyapunov`` (dims exponent, history, state)."""
     k = len(result.exponents)
-    rate = "s-1" if time_units == "s" else f"1/({time_units})"
+    rate = system.per_time()
     data = {
         "exponents": ("exponent", result.exponents, {"units": rate, "long_name": "Lyapunov exponents, descending"}),
-        "history": (("history", "exponent"), result.history,
-                    {"units": rate, "long_name": "running estimates at each re-orthonormalisation"}),
+        "running_exponents": (("history", "exponent"), result.history,
+                              {"units": rate, "long_name": "running estimates at each re-orthonormalisation"}),
         "history_time": ("history", result.history_time,
-                         {"units": time_units, "long_name": "time since the end of the transient"}),
+                         {"units": system.time_units, "long_name": "time since the end of the transient"}),
         "exponent_sum": ((), float(result.exponents.sum()), {"units": rate, "long_name": "sum of the exponents"}),
-        "final_state": ("state", result.final_state, {"long_name": "state at the end of the run"}),
+        "final_state": ("state", result.final_state, mixed_units("state at the end of the run")),
     }
     if math.isfinite(result.divergence_mean):
         data["divergence_mean"] = ((), result.divergence_mean, {
             "units": rate, "long_name": "time average of div f = tr(df/dx) over the accumulation window (equals "
                                          "the sum of the full spectrum)"})
-    coords = {"exponent": ("exponent", np.arange(k, dtype=np.int32), {"long_name": "exponent index"}),
-              "state": ("state", np.array(system.state_names, dtype=str), {"long_name": "state variable"})}
+    coords = {"exponent": index_coordinate("exponent", k, "exponent index"), **state_coordinates(system)}
     config = {"system": system.name, "system_key": system.key, "heyoka_version": hy.__version__, **config}
-    message = (f"{result.message}; exponents " + ", ".join(f"{v:.6g}" for v in result.exponents) + f" {rate}"
+    shown_units = f" {rate}" if rate != "1" else ""
+    message = (f"{result.message}; exponents " + ", ".join(f"{v:.6g}" for v in result.exponents) + shown_units
                + (f"; sum {result.exponents.sum():.6g}, mean divergence {result.divergence_mean:.6g}"
                   if math.isfinite(result.divergence_mean) else ""))
     attrs = make_attrs("lyapunov", config, result.status, message, mode="spectrum", **system.attrs(),
@@ -168,11 +169,10 @@ def spectrum_dataset(result: LyapunovResult, system: System, config: dict, time_
 
 
 def lyapunov_spectrum(system: System, state, pars=None, *, t_end: float = 100.0, dt: float = 1.0,
-                      transient: float = 0.0, n_exponents: int | None = None, tol: float = TOL,
-                      time_units: str = "time unit") -> xr.Dataset:
-    """The Lyapunov spectrum of ``system`` along the run from ``state`` (kind ``lyapunov``: ``exponents``, the
-    convergence ``history``, and the mean divergence that their sum equals)."""
+                      transient: float = 0.0, n_exponents: int | None = None, tol: float = TOL) -> xr.Dataset:
+    """The Lyapunov spectrum of ``system`` along the run from ``state`` (kind ``lyapunov``: ``exponents``, their
+    convergence ``running_exponents`` along ``history``, and the mean divergence that their sum equals)."""
     result = spectrum(system, state, pars, n_exponents=n_exponents, t_end=t_end, dt=dt, transient=transient, tol=tol)
     config = {"state0": list(map(float, state)), "t_end": t_end, "dt": dt, "transient": transient, "tol": tol,
               "pars": list(map(float, system.with_pars(pars)))}
-    return spectrum_dataset(result, system, config, time_units)
+    return spectrum_dataset(result, system, config)

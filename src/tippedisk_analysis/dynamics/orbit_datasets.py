@@ -9,9 +9,9 @@ import numpy as np
 import xarray as xr
 
 from ..errors import DatasetError, ParameterError
-from ..results import config_of, make_attrs
+from ..results import config_of, index_coordinate, make_attrs
 from . import continuation
-from .datasets import check_system, flag_attrs
+from .datasets import check_system, flag_attrs, label_coordinates, mixed_units, state_coordinates
 from .flows import STABILITY, classify
 from .orbits import NEWTON_MAX_ITER, STATUS, find_orbit
 from .shooting import N_SAMPLES, PeriodicOrbit, ShootingProblem
@@ -71,7 +71,7 @@ def orbits_dataset(orbits: list[PeriodicOrbit], status: str, message: str, confi
     obs = np.array([resample(o, o.observables) for o in orbits]) if n_obs else np.zeros((len(orbits), N, 0))
     pars = np.array([o.pars for o in orbits])
     data = {
-        "period": ("point", clean([o.period for o in orbits]), {"units": "s", "long_name": "period T"}),
+        "period": ("point", clean([o.period for o in orbits]), {"units": system.time_units, "long_name": "period T"}),
         "amplitude": ("point", clean([o.amplitude for o in orbits]),
                       {"units": "1", "long_name": "max_t |x(t) - mean x| in scaled states (x / state_scale)"}),
         "orbit_status": ("point", np.array([STATUS[o.status] for o in orbits], np.int8),
@@ -97,43 +97,45 @@ def orbits_dataset(orbits: list[PeriodicOrbit], status: str, message: str, confi
                                {"long_name": "1: a trivial multiplier (flow direction; families of solutions)",
                                 "flag_values": np.array([0, 1], np.int8), "flag_meanings": "nontrivial trivial"}),
         "initial_state": (("point", "state"), clean([o.states[0] for o in orbits]),
-                          {"long_name": "x_0: the orbit's first point (phase condition)"}),
-        "state_min": (("point", "state"), clean(samples.min(axis=1)), {"long_name": "minimum over the orbit"}),
-        "state_max": (("point", "state"), clean(samples.max(axis=1)), {"long_name": "maximum over the orbit"}),
+                          mixed_units("x_0: the orbit's first point (phase condition)")),
+        "state_min": (("point", "state"), clean(samples.min(axis=1)), mixed_units("minimum over the orbit")),
+        "state_max": (("point", "state"), clean(samples.max(axis=1)), mixed_units("maximum over the orbit")),
         "orbit": (("point", "sample", "state"), clean(samples),
-                  {"long_name": "states along one period at sample_time (the initial state repeated for a failed "
-                                "search)"}),
-        "sample_time": (("point", "sample"), clean(times), {"units": "s", "long_name": "time along the orbit"}),
+                  mixed_units("states along one period at sample_time (the initial state repeated for a failed "
+                              "search)")),
+        "sample_time": (("point", "sample"), clean(times),
+                        {"units": system.time_units, "long_name": "time along the orbit"}),
         "runtime_parameters": (("point", "runtime_parameter"), clean(pars),
-                               {"long_name": "values of the system's runtime parameters"}),
+                               mixed_units("values of the system's runtime parameters", "runtime_parameter")),
     }
     if orbits[0].parameter:
         data[orbits[0].parameter] = ("point", clean([o.value for o in orbits]),
-                                     {"long_name": f"continuation parameter {orbits[0].parameter}"})
+                                     {"units": system.units_of(orbits[0].parameter),
+                                      "long_name": f"continuation parameter {orbits[0].parameter}"})
     if n_obs:
         data["observable_min"] = (("point", "observable"), clean(obs.min(axis=1)),
-                                  {"long_name": "minimum over the orbit"})
+                                  mixed_units("minimum over the orbit", "observable"))
         data["observable_max"] = (("point", "observable"), clean(obs.max(axis=1)),
-                                  {"long_name": "maximum over the orbit"})
+                                  mixed_units("maximum over the orbit", "observable"))
         data["orbit_observables"] = (("point", "sample", "observable"), clean(obs),
-                                     {"long_name": "observables along the orbit"})
+                                     mixed_units("observables along the orbit", "observable"))
     if arclength is not None:
         data["arclength"] = ("point", np.asarray(arclength, float), {"units": "1", "long_name": "pseudo-arclength"})
-    data.update(_special_table(list(special), prob))
+    data.update(_special_table(list(special), system, orbits[0].parameter))
     data.update(extra or {})
     coords = {
-        "point": ("point", np.arange(len(orbits), dtype=np.int32), {"long_name": "orbit index (along the branch)"}),
-        "floquet": ("floquet", np.arange(n, dtype=np.int32), {"long_name": "multiplier index"}),
-        "sample": ("sample", np.arange(N, dtype=np.int32), {"long_name": "sample index along the orbit"}),
-        "state": ("state", np.array(system.state_names, dtype=str), {"long_name": "state variable"}),
-        "runtime_parameter": ("runtime_parameter", np.array(system.parameter_names[: pars.shape[1]], dtype=str),
-                              {"long_name": "runtime parameter"}),
-        "special_point": ("special_point", np.arange(len(special), dtype=np.int32), {"long_name": "special point"}),
+        "point": index_coordinate("point", len(orbits), "orbit index (along the branch)"),
+        "floquet": index_coordinate("floquet", n, "multiplier index"),
+        "sample": index_coordinate("sample", N, "sample index along the orbit"),
+        **state_coordinates(system),
+        **label_coordinates("runtime_parameter", system.parameter_names[: pars.shape[1]],
+                            [system.units_of(p) for p in system.parameter_names[: pars.shape[1]]],
+                            "runtime parameter"),
+        "special_point": index_coordinate("special_point", len(special), "special point"),
     }
     if n_obs:
-        coords["observable"] = ("observable", np.array(list(system.observables), dtype=str),
-                                {"long_name": "observable",
-                                 "units": " ".join(u or "1" for _e, u in system.observables.values())})
+        coords.update(label_coordinates("observable", system.observables,
+                                        [system.units_of(k) for k in system.observables], "observable"))
     config = {"system": system.name, "system_key": system.key, "description": system.description,
               "heyoka_version": hy.__version__, **config}
     attrs = make_attrs("periodic_orbits", config, status, message, **system.attrs(orbits[0].pars),
@@ -142,7 +144,7 @@ def orbits_dataset(orbits: list[PeriodicOrbit], status: str, message: str, confi
     return xr.Dataset(data, coords=coords, attrs=attrs)
 
 
-def _special_table(special: list, prob) -> dict:
+def _special_table(special: list, system: System, parameter: str | None) -> dict:
     def get(key):
         return np.array([float(np.ravel([sp.data.get(key, 0.0)])[0]) if np.isfinite(
             np.ravel([sp.data.get(key, 0.0)])[0]) else 0.0 for sp in special])
@@ -154,16 +156,17 @@ def _special_table(special: list, prob) -> dict:
                           {"long_name": "label: LP fold of cycles, BP branch point, PD period doubling, NS "
                                         "Neimark-Sacker, HC approach to a homoclinic orbit"}),
         "special_index": ("special_point", np.array([sp.index for sp in special], np.int32),
-                          {"long_name": "index along dim point"}),
+                          {"units": "1", "long_name": "index along dim point"}),
         "special_value": ("special_point", np.array([sp.value if np.isfinite(sp.value) else 0.0 for sp in special]),
                           {"long_name": "located test function (|mu| - 1 of the critical multiplier; HC: p - p_hc)"}),
         "special_multiplier_real": ("special_point", get("multiplier_real"),
-                                    {"long_name": "critical multiplier, real part"}),
+                                    {"units": "1", "long_name": "critical multiplier, real part"}),
         "special_multiplier_imag": ("special_point", get("multiplier_imag"),
-                                    {"long_name": "critical multiplier, imaginary part"}),
+                                    {"units": "1", "long_name": "critical multiplier, imaginary part"}),
         "special_angle": ("special_point", get("angle"), {"units": "rad", "long_name": "NS: rotation angle arg mu"}),
-        "special_limit": ("special_point", get("limit"), {"long_name": "HC: extrapolated parameter of the homoclinic "
-                                                                       "orbit"}),
+        "special_limit": ("special_point", get("limit"), {"units": system.units_of(parameter) if parameter else "1",
+                                                           "long_name": "HC: extrapolated parameter of the homoclinic "
+                                                                        "orbit"}),
     }
 
 

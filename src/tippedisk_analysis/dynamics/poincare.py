@@ -19,7 +19,7 @@ import numpy as np
 import xarray as xr
 
 from ..errors import ParameterError
-from ..results import make_attrs
+from ..results import index_coordinate, make_attrs
 from .system import System
 
 DIRECTIONS = ("positive", "negative", "any")
@@ -121,12 +121,12 @@ def poincare_section(system: System, state, quantity: str, level: float = 0.0, *
     pars_vector = system.with_pars(pars)
     cr = crossings(system, state, quantity, level, pars=pars_vector, direction=direction, modulo=modulo,
                    t_end=t_end, transient=transient, max_crossings=max_crossings, tol=tol)
-    data = {"time": ("crossing", cr.times, {"units": "1", "long_name": "time of the crossing"})}
+    data = {"time": ("crossing", cr.times, {"units": system.time_units, "long_name": "time of the crossing"})}
     for i, name in enumerate(system.state_names):
-        data[name] = ("crossing", cr.states[:, i], {"units": system.units.get(name, "1"), "long_name": f"state {name}"})
+        data[name] = ("crossing", cr.states[:, i], {"units": system.units_of(name), "long_name": f"state {name}"})
     if system.observables and len(cr.times):
         for name, values in system.observe(cr.states.T, pars_vector).items():
-            data[name] = ("crossing", np.atleast_1d(values), {"units": system.observables[name][1] or "1",
+            data[name] = ("crossing", np.atleast_1d(values), {"units": system.units_of(name),
                                                               "long_name": f"observable {name}"})
     label = f"{quantity}{' mod 2pi' if modulo else ''}={level:.17g}"
     config = {"system": system.name, "system_key": system.key, "state": list(map(float, state)),
@@ -135,5 +135,5 @@ def poincare_section(system: System, state, quantity: str, level: float = 0.0, *
               "pars": list(map(float, pars_vector))}
     attrs = make_attrs("poincare", config, cr.status, f"{system.name}: {cr.message}", **system.attrs(pars_vector),
                        section=label, direction=direction, n_crossings=len(cr.times), t_final=cr.t_final)
-    return xr.Dataset(data, coords={"crossing": ("crossing", np.arange(len(cr.times), dtype=np.int32),
-                                                 {"long_name": "crossing index"})}, attrs=attrs)
+    return xr.Dataset(data, coords={"crossing": index_coordinate("crossing", len(cr.times), "crossing index")},
+                      attrs=attrs)

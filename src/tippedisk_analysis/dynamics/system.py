@@ -75,12 +75,15 @@ class System:
     quantities of the state (stored along orbits, pinned by equilibrium problems); ``integrals`` {name:
     expression}: first integrals (their levels are pinned where orbits come in families); ``events``
     (:class:`Event`, terminal); ``n_trivial``: trivial Floquet multipliers (1 + independent integrals or
-    families); ``units`` {state name: units}; ``compact_mode``: heyoka's compact mode for large systems.
+    families); ``units`` {state or parameter name: UDUNITS units}, ``time_units`` (default "1"): undeclared
+    units are taken as dimensionless ("1") in the datasets; ``compact_mode``: heyoka's compact mode for large
+    systems.
     """
 
     def __init__(self, name: str, variables, rhs, parameters: dict | None = None, *, state_names=None,
                  state_scale=None, observables: dict | None = None, integrals: dict | None = None, events=(),
-                 n_trivial: int = 1, units: dict | None = None, compact_mode: bool = False, description: str = ""):
+                 n_trivial: int = 1, units: dict | None = None, time_units: str = "1", compact_mode: bool = False,
+                 description: str = ""):
         if not isinstance(name, str) or not name:
             raise ParameterError("a System needs a name (a non-empty string), e.g. System('ab', ...)")
         self.name = name
@@ -103,6 +106,7 @@ class System:
         self.events = tuple(events)
         self.n_trivial = int(n_trivial)
         self.units = dict(units or {})
+        self.time_units = str(time_units)
         self.compact_mode = bool(compact_mode)
         self.description = description
         self._check_names()
@@ -193,6 +197,18 @@ class System:
         for name, value in values.items():
             out[self.parameter_index(name)] = float(value)
         return out
+
+    def units_of(self, name: str) -> str:
+        """UDUNITS units of a state, parameter or observable ("1" where none were declared)."""
+        if name in self.observables:
+            return self.observables[name][1] or "1"
+        return self.units.get(name, "1")
+
+    def per_time(self, units: str = "1") -> str:
+        """``units`` per time unit, e.g. "rad s-1" (time in s), "rad" (dimensionless time)."""
+        if self.time_units == "1":
+            return units
+        return f"{self.time_units}-1" if units == "1" else f"{units} {self.time_units}-1"
 
     def equations(self) -> list[str]:
         """The right-hand sides as text, e.g. "u1' = ..." (for the datasets' attributes: to read, not to eval)."""

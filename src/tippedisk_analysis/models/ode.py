@@ -46,7 +46,8 @@ from .. import kinematics as kin
 from ..defaults import FALL_ANGLE, SLIP_SMOOTHING
 from ..dynamics import Event, System
 from ..parameters import InitialState, Setup
-from .variables import ORIENTATIONS, OUTPUT_NAMES, PARAMETER_NAMES, state_names  # noqa: F401 (ode.OUTPUT_NAMES)
+from .variables import (ORIENTATIONS, OUTPUT_NAMES, PARAMETER_NAMES, PARAMETER_UNITS,  # noqa: F401
+                        state_names)
 
 P = {name: hy.par[i] for i, name in enumerate(PARAMETER_NAMES)}
 
@@ -267,7 +268,8 @@ def as_system(model: OdeModel) -> System:
     observables = {name: out for name, out in zip(OUTPUT_NAMES, outputs) if name not in model.state_names}
     events = (Event("fell", fall), Event("lift_off", observables["lambda_N"]))
     return System(model.name, variables, [rhs for _v, rhs in sys], dict(zip(PARAMETER_NAMES, parameter_vector())),
-                  state_names=model.state_names, observables=observables, events=events,
+                  state_names=model.state_names, observables=observables, events=events, units=PARAMETER_UNITS,
+                  time_units="s",
                   description=f"{model.paper_name}: bilateral contact at C1, smooth Coulomb friction (2.29)")
 
 

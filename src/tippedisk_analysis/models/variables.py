@@ -8,6 +8,10 @@ from __future__ import annotations
 PARAMETER_NAMES = ("m", "e", "r", "A", "B", "C", "gravity", "mu", "eps", "slip_smoothing", "fall_angle")
 """Runtime parameters hy.par[i] of the ODE models, in index order: one compiled integrator serves every value."""
 
+PARAMETER_UNITS = {"m": "kg", "e": "m", "r": "m", "A": "kg m2", "B": "kg m2", "C": "kg m2", "gravity": "m s-2",
+                   "mu": "1", "eps": "m s-1", "slip_smoothing": "m s-1", "fall_angle": "rad"}
+"""UDUNITS units of the runtime parameters (Tables 1-2, Sect. 4.1)."""
+
 ORIENTATIONS = {"ode-euler": ("alpha", "beta", "gamma"), "ode-quaternion": ("p0", "p1", "p2", "p3")}
 """Orientation coordinates of each ODE model: Euler angles (3.1) or the quaternion (3.40)."""
 

@@ -21,9 +21,9 @@ import numpy as np
 import xarray as xr
 
 from ...errors import ParameterError
-from ...results import make_attrs
+from ...results import index_coordinate, make_attrs
 from .. import sweeps
-from ..datasets import flag_attrs
+from ..datasets import flag_attrs, label_coordinates, mixed_units, state_coordinates
 from ..system import System
 from .mapping import map_points
 from .problem import Problem, describe, equilibrium_description, periodic_description, return_lag
@@ -157,27 +157,30 @@ def _assemble(system: System, config: dict, results: dict) -> xr.Dataset:
             "units": "1", "long_name": "attractor id (>= 0, see dimension attractor) or negative label",
             "flag_values": flag_values, "flag_meanings": flag_meanings}),
         "assignment_time": (dims, np.asarray(results["t_assign"]).reshape(shape), {
-            "units": "1", "long_name": "time at which the run was assigned to an attractor or labelled"}),
+            "units": system.time_units,
+            "long_name": "time at which the run was assigned to an attractor or labelled"}),
         "basin_fraction": ("attractor", np.array([np.mean(outcome == i) for i in range(len(table))]),
                            {"units": "1", "long_name": "share of the initial conditions in the basin"}),
         "attractor_kind": ("attractor", np.array([BASE_KINDS.index(d.kind) for d in table], dtype=np.int8),
                            flag_attrs("kind of attractor", {k: i for i, k in enumerate(BASE_KINDS)})),
         "attractor_period": ("attractor", np.array([d.period for d in table], dtype=float),
-                             {"units": "1", "long_name": "period (periodic attractors; fill -1: none)"}),
+                             {"units": system.time_units,
+                              "long_name": "period (periodic attractors; fill -1: none)"}),
         "attractor_amplitude": ("attractor", np.array([d.amplitude for d in table], dtype=float),
-                                {"units": "1", "long_name": "half peak-to-peak of the first observed coordinate"}),
+                                {"units": system.units_of(grid.names[0]),
+                                 "long_name": "half peak-to-peak of the first observed coordinate"}),
         "attractor_state": (("attractor", "state"), np.array([d.representative for d in table], dtype=float)
-                            .reshape(len(table), system.n), {"units": "1", "long_name": "a state on the attractor "
-                                                             "(equilibria: the settled state)"}),
+                            .reshape(len(table), system.n),
+                            mixed_units("a state on the attractor (equilibria: the settled state)")),
         "attractor_centroid": (("attractor", "observed"), np.array([d.centroid for d in table], dtype=float)
                                .reshape(len(table), len(grid.names)),
-                               {"units": "1", "long_name": "mean of the observed coordinates on the attractor"}),
+                               mixed_units("mean of the observed coordinates on the attractor", "observed")),
     }
-    coords = {name: (name, np.linspace(*axis), {"units": system.units.get(name, "1"),
+    coords = {name: (name, np.linspace(*axis), {"units": system.units_of(name),
                                                 "long_name": f"initial {name}"}) for name, axis in axes.items()}
-    coords.update({"attractor": ("attractor", np.arange(len(table), dtype=np.int32), {"long_name": "attractor id"}),
-                   "state": ("state", list(system.state_names), {"long_name": "state variable"}),
-                   "observed": ("observed", list(grid.names), {"long_name": "observed coordinate of the cell grid"})})
+    coords.update({"attractor": index_coordinate("attractor", len(table), "attractor id"), **state_coordinates(system),
+                   **label_coordinates("observed", grid.names, [system.units_of(n) for n in grid.names],
+                                       "observed coordinate of the cell grid")})
     counts = ", ".join(f"{int(np.sum(outcome == v))} {k}" for k, v in labels.items())
     message = (f"{system.name}: {n} runs, {len(table)} attractor(s) (" + ", ".join(
         f"A{i} {d.kind} {np.mean(outcome == i):.3g}" for i, d in enumerate(table)) + f"); {counts}")
