@@ -38,6 +38,7 @@ COMMANDS = {  # one run of every command that writes a dataset, small enough for
     "simulate_euler": ["simulate", "--model", "ode-euler", "--t-end", "0.2"],
     "simulate_quaternion": ["simulate", "--model", "ode-quaternion", "--t-end", "0.2"],
     "simulate_moreau": ["simulate", "--model", "m1", "--t-end", "0.02"],
+    "simulate_hybrid": ["simulate", "--model", "h1", "--t-end", "0.6"],
     "stability_map": ["stability-map", "--omega", "30:60:4", "--eps", "0.1:0.4:4"],
     "outcome_map_rules": ["outcome-map", "--omega", "30:40:2", "--eps", "0.1:0.2:2", "--t-end", "1",
                           "--classify", "rules"],

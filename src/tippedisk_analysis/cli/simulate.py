@@ -23,7 +23,8 @@ INITIAL = (  # option, InitialState field, help
 
 def _arguments(p) -> None:
     p.add_argument("--model", default="ode-euler",
-                   help="model name, e.g. ode-euler (ode1), ode-quaternion (ode2), Moreau Models 1-10: m1 ... m10")
+                   help="model name, e.g. ode-euler (ode1), ode-quaternion (ode2), Moreau Models 1-10: m1 ... m10, "
+                        "the event-driven set-valued Coulomb model hybrid-euler (h1)")
     p.add_argument("--t-end", type=finite_float, default=5.0, help="end time [s] (default 5)")
     add_output(p)
     p.add_argument("--dt-output", type=finite_float, help="output sampling of ODE models [s] (default 1e-3)")

@@ -115,7 +115,7 @@ class ContactDynamics:
     g_N1: object  # gap at C1 (2.12) [m]
 
 
-def contact_dynamics(trig: Trig, r_xy, v_xy, omega, slip_norm=None) -> ContactDynamics:
+def contact_dynamics(trig: Trig, r_xy, v_xy, omega, slip_norm=None, slip_direction=None) -> ContactDynamics:
     """Newton-Euler equations with the bilateral contact at C1 and smooth Coulomb friction.
 
     trig: sin/cos of the Euler angles; r_xy, v_xy: horizontal position and velocity of G (I-frame);
@@ -125,6 +125,9 @@ def contact_dynamics(trig: Trig, r_xy, v_xy, omega, slip_norm=None) -> ContactDy
     slip_norm: an expression to use for |gamma_T| in (2.29) instead of the slip's own norm (the
     normal forms of analysis/ need the law's dependence on |gamma_T| separately, since |gamma_T|
     is not differentiable at zero slip); default the model's analytic |gamma_T|.
+    slip_direction: (t_x, t_y), the unit slip direction in the I-frame, for set-valued Coulomb friction
+    while sliding, F = lambda_N (e_z^I - mu t) (2.24) (the hybrid model: the slip is integrated as speed
+    and angle); replaces the smooth law.
     """
     m, e, r, g = P["m"], P["e"], P["r"], P["gravity"]
     theta_S = [P["A"], P["B"] - m * e * e, P["C"] - m * e * e]
@@ -143,9 +146,15 @@ def contact_dynamics(trig: Trig, r_xy, v_xy, omega, slip_norm=None) -> ContactDy
     gamma_N = _dot(v_C, ez_I)  # (2.14)
     slip = [v_C[i] - gamma_N * ez_I[i] for i in range(3)]
     slip_squared = _dot(v_C, v_C) - gamma_N * gamma_N
-    norm = slip_magnitude(slip_squared, P["slip_smoothing"]) if slip_norm is None else slip_norm
-    k = P["mu"] / (norm + P["eps"])  # (2.29)
-    n = [ez_I[i] - k * slip[i] for i in range(3)]  # F = lambda_N n
+    if slip_direction is None:
+        norm = slip_magnitude(slip_squared, P["slip_smoothing"]) if slip_norm is None else slip_norm
+        k = P["mu"] / (norm + P["eps"])  # (2.29)
+        n = [ez_I[i] - k * slip[i] for i in range(3)]  # F = lambda_N n
+        friction_power = -k * slip_squared  # per unit lambda_N
+    else:  # set-valued Coulomb while sliding: -mu lambda_N along the slip direction
+        t_G = trig.G_from_I([slip_direction[0], slip_direction[1], 0.0])
+        n = [ez_I[i] - P["mu"] * t_G[i] for i in range(3)]
+        friction_power = -P["mu"] * _dot(t_G, slip)
 
     # Psi = psi0 + lambda_N psi1: Euler's equation about S, B-frame
     L = [theta_S[i] * omega[i] for i in range(3)]
@@ -183,7 +192,7 @@ def contact_dynamics(trig: Trig, r_xy, v_xy, omega, slip_norm=None) -> ContactDy
         lambda_N=lambda_N,
         slip=slip_I,
         gamma_N=gamma_N,
-        friction_power=-lambda_N * k * slip_squared,
+        friction_power=lambda_N * friction_power,
         euler_rates=[alpha_d, beta_d, gamma_d],
         energies={"E_kin": 0.5 * m * _dot(v_S, v_S) + 0.5 * _dot(omega, L), "E_pot": m * g * z_S},
         z_S=z_S,

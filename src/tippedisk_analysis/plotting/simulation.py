@@ -134,12 +134,24 @@ def simulation_figure(ds: xr.Dataset, companion: xr.Dataset | None = None, angle
     draw(ax, "E_tot", r"$E_\mathrm{tot}$", style_table=ENERGY_STYLES)
     ax.set(xlabel=TIME_LABEL, ylabel=r"energy $E_\mathrm{pot}$, $E_\mathrm{tot}$ [J]")
     _legend_above(ax)
+    if "mode" in ds:
+        _shade_sliding(axes.ravel(), ds)
     if title is None:
         title = f"{main} ({ds.attrs.get('model', '')}): {ds.attrs.get('status', '')}"
         if companion is not None:
             title += f"; {comp} ({companion.attrs.get('model', '')}): {companion.attrs.get('status', '')}"
     fig.suptitle(title, fontsize=10)
     return fig
+
+
+def _shade_sliding(axes, ds: xr.Dataset) -> None:
+    """The sliding intervals of an event-driven run (``switch_time`` / ``switch_mode``) shaded grey."""
+    times = list(ds["switch_time"].values) + [float(ds["time"].values[-1])]
+    sliding = [k for k, m in enumerate(ds["switch_mode"].values) if int(m) == 1]
+    for ax in axes:
+        for n, k in enumerate(sliding):
+            ax.axvspan(times[k], times[k + 1], color="0.85", zorder=0, lw=0, label="sliding" if n == 0 else None)
+    axes[0].legend(fontsize=7, loc="lower right")
 
 
 def disk_of(ds: xr.Dataset) -> dict | None:

@@ -154,6 +154,17 @@ register(ModelInfo("ode-quaternion", "ODE Model 2", "quaternions, bilateral cont
                    ("ode2",), _run_ode("ode-quaternion"), _ODE_OPTIONS))
 
 
+def _run_hybrid(setup, initial, t_end, **options):
+    from . import hybrid  # heyoka is imported on first use only
+
+    return hybrid.run(setup, initial, t_end, **options)
+
+
+register(ModelInfo("hybrid-euler", "Models 1/2 (event-driven)", "Euler angles, bilateral contact at C1, "
+                   "set-valued Coulomb: rolling and sliding switched by events (heyoka)", ("h1",), _run_hybrid,
+                   (*_ODE_OPTIONS, "max_switches")))
+
+
 def _run_moreau(model_name: str):
     def run(setup, initial, t_end, **options):
         return moreau.run(model_name, setup, initial, t_end, **options)  # numba loads on first use
