@@ -24,6 +24,7 @@ from tippedisk_studies._common import (CONTENSOU_VARIANT, amplitude, down_time, 
                                        leave_time, onset_of_fast_oscillation, prepare, save, window)
 
 import tippedisk_analysis as td
+from tippedisk_analysis.results import config_of
 
 # run key: (model, t_end [s], options)
 RUNS = {
@@ -39,8 +40,9 @@ RUNS = {
     "m8": ("m8", 5.0, {}),
     "m10": ("m10", 25.0, {}),
     "ode2": ("ode-quaternion", 25.0, {"dt_output": 1e-3}),
+    "h1": ("h1", 5.0, {}),
 }
-KEPT = ("alpha", "beta", "gamma", "z_S", "E_kin", "E_pot", "E_tot", "g_N1")
+KEPT = ("alpha", "beta", "gamma", "z_S", "E_kin", "E_pot", "E_tot", "g_N1", "mode")  # mode: h1 only
 FINE_UNTIL, COARSE_EVERY = 5.0, 10  # 1-ms samples on [0, 5] s, every 10th (10 ms) after
 R_MINUS_E, R_PLUS_E = td.Disk().r - td.Disk().e, td.Disk().r + td.Disk().e
 VERDICTS = ("reproduced", "partly", "not reproduced", "not checkable")
@@ -52,7 +54,8 @@ def compact(ds):
     index = np.flatnonzero(t <= FINE_UNTIL + 1e-9)
     late = np.flatnonzero(t > FINE_UNTIL + 1e-9)
     keep = np.concatenate([index, late[COARSE_EVERY - 1::COARSE_EVERY]])
-    small = ds[[v for v in KEPT if v in ds]].isel(time=keep).astype(np.float32)
+    small = ds[[v for v in KEPT if v in ds]].isel(time=keep)
+    small = small.assign({k: v.astype(np.float32) for k, v in small.data_vars.items() if v.dtype.kind == "f"})
     small = small.assign_coords(time=ds.time.values[keep])
     small.attrs = dict(ds.attrs, sampling="1-ms samples on [0, 5] s, 10-ms samples after; float32 "
                                           "(studies/sect6_table.py)")
@@ -141,8 +144,9 @@ def _saturated_gap(ds, paper):
     return g25, g5, ok
 
 
-def table_rows(runs: dict, fig13=None, fig17=None) -> list[Row]:
-    """The rows of the Sect. 6 table, computed from the stored runs (see RUNS) and the Fig. 13/17 datasets."""
+def table_rows(runs: dict, fig13=None, fig17=None, rolling=None) -> list[Row]:
+    """The rows of the Sect. 6 table, computed from the stored runs (see RUNS), the Fig. 13/17 datasets and the
+    rolling torus of studies/rolling.py (rolling_orbit.nc)."""
     r = runs
     rows = []
     add = rows.append
@@ -332,6 +336,30 @@ def table_rows(runs: dict, fig13=None, fig17=None) -> list[Row]:
                 "qualitative",
                 f"the disk inverts within the sequence: gamma reaches pi/2 at {_fmt(t_half, '.2f', 's')}",
                 "no images of the experiment to compare with", _judge(None)))
+    # --- explained by the rolling analysis (studies/rolling.py): the event-driven model (h1) shows Model 1's
+    # constant energy: after the last stick the disk rolls
+    m1, h1 = r["m1"], r["h1"]
+    slides = h1.time.values[h1["mode"].values > 0.5]
+    t_stick = float(slides[-1]) if slides.size else 0.0
+    e_h1, e_m1 = _at(h1, "E_tot", 5), _at(m1, "E_tot", 5)
+    late_energy = window(h1, "E_tot", 0.5, 5)
+    drift = float(np.ptp(late_energy)) if late_energy.size else math.nan
+    add(Row("7", "Model 1: E_tot almost constant after 0.5 s (explained: after its last stick the disk rolls "
+                 "without slip, and rolling conserves energy)", "~constant",
+            f"event-driven model h1: slides until {t_stick:.3f} s, then rolls; E_tot(5 s) {e_h1:.5f} J (Model 1 "
+            f"{e_m1:.5f} J); range of h1's E_tot on [0.5, 5] s {drift:.2g} J",
+            "h1 rolls from before 0.5 s on, |E_h1 - E_M1| < 1e-3 J at 5 s, h1's range < 1e-9 J",
+            _judge(t_stick < 0.5 and abs(e_h1 - e_m1) < 1e-3 and drift < 1e-9)))
+    if rolling is not None:
+        kind = config_of(rolling).get("motion", "")
+        rho, period = float(rolling["rotation_number"]), float(rolling["period"][0])
+        returns = np.diff(rolling["return_time"].values)
+        add(Row("14", "Models 1/2: a periodic oscillation about pi/2 after the inversion (explained: the rolling "
+                      "motion's returns to gamma = pi/2 lie on a closed curve, an invariant torus)", "periodic",
+                f"{kind}: rotation number {rho:.6f} of the returns, return time {returns.mean():.4f} s "
+                f"(+-{returns.std():.1e} s); an elliptic orbit at its centre, T = {period:.4f} s",
+                "periodic: every return at one point; quasi-periodic (partly): on a closed curve",
+                _judge(kind == "periodic orbit", partly=kind == "torus")))
     return rows
 
 
@@ -392,7 +420,7 @@ def update_readmes(root: Path | None = None) -> str:
     data = root / "data"
     with np.errstate(all="ignore"):
         rows = table_rows(load_runs(data / "sect6"), td.load(data / "fig13_ode_inversion.nc"),
-                          td.load(data / "fig17_stroboscope.nc"))
+                          td.load(data / "fig17_stroboscope.nc"), td.load(data / "rolling" / "rolling_orbit.nc"))
     blocks = {root / "studies" / "README.md": ("sect6-table", markdown(rows) + "\n\n" + summary(rows)),
               root / "README.md": ("sect6-summary", summary(rows) + "\n\n" + markdown_short(rows))}
     for path, (name, body) in blocks.items():
@@ -403,9 +431,10 @@ def update_readmes(root: Path | None = None) -> str:
     return summary(rows)
 
 
-def _find(out: Path, name: str):
-    """A dataset of another study: from the output folder if that study ran there, else from data/."""
-    for folder in (out, Path(__file__).resolve().parents[1] / "data"):
+def _find(out: Path, name: str, data_folder: str = ""):
+    """A dataset of another study: from the output folder if that study ran there, else from data/
+    (its ``data_folder`` there)."""
+    for folder in (out, Path(__file__).resolve().parents[1] / "data" / data_folder):
         if (folder / name).is_file():
             print(f"reading {folder / name}")
             return td.load(folder / name)
@@ -416,8 +445,9 @@ def main(output_dir: str = "output", quick: bool = False):
     out = prepare(output_dir)
     runs = simulate_runs(out, quick)
     fig13, fig17 = (_find(out, name) for name in ("fig13_ode_inversion.nc", "fig17_stroboscope.nc"))
+    rolling = _find(out, "rolling_orbit.nc", "rolling")
     with np.errstate(all="ignore"):
-        rows = table_rows(runs, fig13, fig17)
+        rows = table_rows(runs, fig13, fig17, rolling)
     text = markdown(rows)
     (out / "sect6_table.md").write_text(f"{text}\n\n{summary(rows)}\n\nNot reproduced in full:\n\n"
                                         f"{markdown_short(rows)}\n")

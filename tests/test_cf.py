@@ -44,6 +44,7 @@ COMMANDS = {  # one run of every command that writes a dataset, small enough for
                           "--classify", "rules"],
     "outcome_map_attractors": ["outcome-map", "--omega", "30:40:2", "--eps", "0.1:0.2:2", "--t-end", "60"],
     "poincare": ["poincare", "--t-end", "2"],
+    "poincare_hybrid": ["poincare", "--model", "h1", "--section", "gamma mod 2pi=pi/2", "--t-end", "2"],
     "bifurcation": ["bifurcation", "--omega", "30:40:2", "--t-end", "2", "--t-transient", "1"],
     "continue": ["continue", "--from", "20", "--to", "120"],
     "periodic_orbits": ["periodic-orbits", "--system", "bautin", "--to", "-0.3"],
@@ -99,6 +100,8 @@ def written(tmp_path_factory):
     d = tmp_path_factory.mktemp("cf_written")
     for name, args in COMMANDS.items():
         assert main([*args, "-o", str(d / f"{name}.nc")]) in (0, 1), name
+    assert main(["periodic-orbits", "--from-run", str(d / "simulate_hybrid.nc"), "--returns-time", "200", "-o",
+                 str(d / "periodic_orbits_rolling.nc")]) == 0
     ab = dy.textbook_system("ab")
     eq = dy.equilibrium_branch(ab, [0.0, 0.0], "D", bounds=(0.0, 0.2))
     generic = {
@@ -116,8 +119,8 @@ def written(tmp_path_factory):
     return d
 
 
-@pytest.mark.parametrize("name", [*COMMANDS, "generic_continuation", "generic_curve", "generic_periodic_orbits",
-                                  "generic_lyapunov", "generic_basins", "generic_poincare"])
+@pytest.mark.parametrize("name", [*COMMANDS, "periodic_orbits_rolling", "generic_continuation", "generic_curve",
+                                  "generic_periodic_orbits", "generic_lyapunov", "generic_basins", "generic_poincare"])
 def test_every_kind_the_package_writes_passes_the_cf_checker(written, tables, name):
     errors, warnings, findings = cf_check(written / f"{name}.nc", tables)
     assert (errors, warnings) == (0, 0), findings

@@ -36,7 +36,8 @@ def runs():
 def rows(runs):
     with np.errstate(all="ignore"):
         return sect6_table.table_rows(runs, td.load(DATA / "fig13_ode_inversion.nc"),
-                                      td.load(DATA / "fig17_stroboscope.nc"))
+                                      td.load(DATA / "fig17_stroboscope.nc"),
+                                      td.load(DATA / "rolling" / "rolling_orbit.nc"))
 
 
 def _block(path: Path, name: str) -> str:

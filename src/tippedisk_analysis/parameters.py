@@ -308,6 +308,11 @@ def to_dict(obj) -> dict:
     return _without_empty_geometry(dataclasses.asdict(obj))
 
 
+def setup_from_dict(d: dict) -> Setup:
+    """The :class:`Setup` of its :func:`to_dict` form (a dataset's configuration)."""
+    return Setup(Disk(**d["disk"]), Friction(**d["friction"]), d.get("gravity", Setup().gravity))
+
+
 def _without_empty_geometry(d):
     if isinstance(d, dict):
         return {k: _without_empty_geometry(v) for k, v in d.items() if not (k == "geometry" and v is None)}

@@ -16,7 +16,7 @@ from ..defaults import BATCH_SIZE, FALL_ANGLE, MAP_TOL, SLIP_SMOOTHING
 from ..dynamics import sweeps
 from ..errors import ParameterError
 from ..models import ode
-from ..parameters import Disk, Friction, InitialState, Setup, to_dict
+from ..parameters import InitialState, Setup, setup_from_dict, to_dict
 from ..ranges import parse_range
 from ..results import describe as describe_units, index_coordinate
 from ..results import make_attrs
@@ -55,7 +55,7 @@ def initial_state(setup: Setup, values: dict) -> np.ndarray:
 def _setup(base: dict, params: dict) -> Setup:
     """The stored setup with the parameters eps, mu, e set; e with what the disk holds fixed
     (Disk.with_eccentricity: A, B, C about G, or the drilled disk's hole moves)."""
-    s = Setup(Disk(**base["disk"]), Friction(**base["friction"]), base["gravity"])
+    s = setup_from_dict(base)
     fric = {k: float(v) for k, v in params.items() if k in ("eps", "mu")}
     disk = s.disk.with_eccentricity(float(params["e"])) if "e" in params else s.disk
     return dataclasses.replace(s, friction=dataclasses.replace(s.friction, **fric), disk=disk)

@@ -24,7 +24,7 @@ import xarray as xr
 from ..defaults import BIFURCATION_TOL, FALL_ANGLE
 from ..errors import ParameterError
 from ..models import ode
-from ..parameters import Disk, Friction, InitialState, Setup, to_dict
+from ..parameters import InitialState, Setup, setup_from_dict, to_dict
 from ..ranges import check_axis, check_range
 from ..results import VARIABLES, describe, make_attrs
 from ..dynamics import sweeps
@@ -71,8 +71,7 @@ def _linspace_slice(a: float, b: float, n: int, i0: int, i1: int) -> np.ndarray:
 
 
 def _setup_of(config: dict) -> tuple[Setup, InitialState]:
-    s = config["setup"]
-    return Setup(Disk(**s["disk"]), Friction(**s["friction"]), s["gravity"]), InitialState(**config["initial"])
+    return setup_from_dict(config["setup"]), InitialState(**config["initial"])
 
 
 def run_chunk(config: dict, start: int, stop: int) -> dict:

@@ -125,10 +125,9 @@ class MapConfig:
         self.base_setup()  # validates
 
     def base_setup(self):
-        from ..parameters import Disk, Friction, Setup
+        from ..parameters import setup_from_dict
 
-        s = self.setup
-        return Setup(Disk(**s["disk"]), Friction(**s["friction"]), s["gravity"])
+        return setup_from_dict(self.setup)
 
     def axes(self) -> dict:
         return {"omega": np.linspace(*self.omega), "eps": np.linspace(*self.eps)}

@@ -26,7 +26,7 @@ from ..dynamics.shooting import PeriodicOrbit, ShootingProblem
 from ..dynamics.system import System
 from ..errors import ParameterError
 from ..models import ode
-from ..parameters import Disk, Friction, Setup, to_dict
+from ..parameters import Setup, setup_from_dict, to_dict
 from ..results import index_coordinate
 from . import reduced
 
@@ -40,11 +40,6 @@ def tippedisk_system(setup: Setup | None = None) -> System:
     pars = ode.parameter_vector(setup)
     conservative = pars[ode.PARAMETER_NAMES.index("mu")] == 0.0
     return reduced.system(frictionless=conservative).with_defaults(pars)
-
-
-def _setup_from(config_setup: dict) -> Setup:
-    return Setup(disk=Disk(**config_setup["disk"]), friction=Friction(**config_setup["friction"]),
-                 gravity=config_setup.get("gravity", Setup().gravity))
 
 
 def _energy_change(orbit: PeriodicOrbit) -> float:
@@ -84,7 +79,7 @@ def tippedisk_orbits_from_hopf(ds: xr.Dataset, label: str, amplitudes=(1e-3, 1e-
     if kind != "hopf":
         raise ParameterError(f"{label} is a {kind} point; periodic orbits start at a Hopf point (HOPFn)")
     config = config_of(ds)
-    setup = _setup_from(config["setup"])
+    setup = setup_from_dict(config["setup"])
     values = {name: float(ds[name].values[index]) for name in sc.PARAMETERS}
     if values["inertia"] != 1.0 or any(n in config.get("free", []) for n in ("eps", "mu", "e")):
         setup = sc._setup_with(setup, {k: v for k, v in values.items() if k != "omega"})
@@ -147,7 +142,7 @@ def tippedisk_orbits_from_run(run: xr.Dataset, *, crossing: int = -2, section: s
     if config.get("model") not in ode.MODELS:
         raise ParameterError(f"the run is of model {config.get('model')!r}; give a run of an ODE model "
                              "(ode-euler or ode-quaternion): the reduced system is ODE Model 1's")
-    setup = _setup_from(config["setup"])
+    setup = setup_from_dict(config["setup"])
     initial = InitialState(**config["initial"])
     cr, X, W = tippedisk_returns(setup, initial, float(config["t_end"]), section=section)
     n = len(cr.times)
@@ -316,7 +311,7 @@ def system_of(ds: xr.Dataset) -> System:
 
     name = str(ds.attrs.get("system", ""))
     if name.startswith("tippedisk_reduced"):
-        return tippedisk_system(_setup_from(config_of(ds)["setup"]))
+        return tippedisk_system(setup_from_dict(config_of(ds)["setup"]))
     for key in TEXTBOOK:
         if textbook_system(key).name == name:
             return textbook_system(key)

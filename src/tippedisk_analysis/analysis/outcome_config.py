@@ -16,7 +16,7 @@ from ..defaults import (BATCH_SIZE, CHUNK_SIZE, FALL_ANGLE, MAP_TOL, OUTCOME_THR
 from ..dynamics import sweeps
 from ..errors import ParameterError
 from ..models import ode
-from ..parameters import Disk, Friction, InitialState, Setup, eccentricity_columns, to_dict
+from ..parameters import Disk, Friction, InitialState, Setup, eccentricity_columns, setup_from_dict, to_dict
 from ..ranges import check_range
 from . import basins
 
@@ -100,8 +100,7 @@ class MapConfig(sweeps.Grid):
         return self.axis_values()
 
     def base_setup(self) -> Setup:
-        s = self.setup
-        return Setup(Disk(**s["disk"]), Friction(**s["friction"]), s["gravity"])
+        return setup_from_dict(self.setup)
 
     def points(self, start: int = 0, stop: int | None = None, index=None) -> dict[str, np.ndarray]:
         """Swept values of the flattened grid points [start, stop) (C order), or of the flat ``index``."""

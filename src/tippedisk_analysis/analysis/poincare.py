@@ -245,8 +245,13 @@ def poincare_section(section: str | Section = "beta_dot=0", *, direction: str = 
     from ..solvers import resolve, taylor
 
     model_name = resolve(model).name
+    if model_name == "hybrid-euler":
+        sec = section if isinstance(section, Section) else parse_section(section, direction, "ode-euler")
+        return _hybrid_section(sec, setup or Setup(), initial or InitialState(), t_transient, t_end, max_crossings,
+                               tol, fall_angle, slip_smoothing)
     if model_name not in ode.MODELS:
-        raise ParameterError(f"Poincaré sections need an ODE model (ode-euler, ode-quaternion), not {model!r}")
+        raise ParameterError(f"Poincaré sections need an ODE model (ode-euler, ode-quaternion) or the hybrid model "
+                             f"(hybrid-euler), not {model!r}")
     sec = section if isinstance(section, Section) else parse_section(section, direction, model_name)
     setup, initial = setup or Setup(), initial or InitialState()
     cr = crossings(sec, model_name=model_name, setup=setup, initial=initial, t_transient=t_transient,
@@ -278,6 +283,42 @@ def poincare_section(section: str | Section = "beta_dot=0", *, direction: str = 
                          n_steps=cr.n_steps, valid=int(cr.lift_off_time is None),
                          lift_off_time=cr.lift_off_time),
     )
+    ds["n_crossings"] = ((), np.int64(n), {"units": "1", "long_name": "number of crossings stored"})
+    ds["crossing"].attrs.update(units="1", long_name="crossing index (after the transient)")
+    return describe(ds)
+
+
+def _hybrid_section(sec: Section, setup: Setup, initial: InitialState, t_transient: float, t_end: float,
+                    max_crossings: int | None, tol: float, fall_angle: float, slip_smoothing: float) -> xr.Dataset:
+    """The section of a hybrid-euler run: the crossings located by events in the rolling or the sliding mode,
+    with the mode at each crossing (as :func:`poincare_section`)."""
+    from ..solvers import hybrid
+
+    _check(t_transient, t_end, max_crossings, tol, fall_angle)
+    cr = hybrid.section_crossings(setup, initial, sec.quantity, sec.level, modulo=sec.modulo,
+                                  direction=sec.direction, t_transient=t_transient, t_end=t_end, tol=tol,
+                                  fall_angle=fall_angle, slip_smoothing=slip_smoothing)
+    n = len(cr["time"]) if max_crossings is None else min(max_crossings, len(cr["time"]))
+    data = {name: np.asarray(v[:n], dtype=float) for name, v in cr["data"].items()}
+    data["E_tot"] = data["E_kin"] + data["E_pot"]
+    config = {"model": "hybrid-euler", "setup": to_dict(setup), "initial": to_dict(initial),
+              "section": {"quantity": sec.quantity, "level": sec.level, "modulo": int(sec.modulo),
+                          "direction": sec.direction},
+              "t_transient": t_transient, "t_end": t_end, "max_crossings": max_crossings,
+              "integrator": {"name": "heyoka.taylor_adaptive", "tol": tol, "fall_angle": fall_angle,
+                             "slip_smoothing": slip_smoothing}}
+    flags = {"flag_values": np.array(list(hybrid.MODES.values()), np.int8), "flag_meanings": " ".join(hybrid.MODES)}
+    ds = xr.Dataset(
+        {"time": ("crossing", cr["time"][:n]), **{k: ("crossing", v) for k, v in data.items()},
+         "mode": ("crossing", cr["mode"][:n], {"units": "1", "long_name": "contact mode at the crossing", **flags})},
+        coords={"crossing": index_coordinate("crossing", n, "crossing index")},
+        attrs=make_attrs("poincare", config, cr["status"], f"{cr['message']}; {n} crossing(s)", model="hybrid-euler",
+                         paper_model="event-driven Models 1/2", section=sec.label, direction=sec.direction,
+                         n_crossings=n, t_final=cr["t_final"], n_steps=0, valid=int(cr["status"] != "lift_off"),
+                         lift_off_time=cr["t_final"] if cr["status"] == "lift_off" else None),
+    )
+    for name, attrs in hybrid.VARIABLE_ATTRS.items():
+        ds[name].attrs.update(attrs)
     ds["n_crossings"] = ((), np.int64(n), {"units": "1", "long_name": "number of crossings stored"})
     ds["crossing"].attrs.update(units="1", long_name="crossing index (after the transient)")
     return describe(ds)

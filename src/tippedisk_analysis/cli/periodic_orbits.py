@@ -22,8 +22,9 @@ def _arguments(p) -> None:
     source = p.add_argument_group("start (give exactly one)")
     source.add_argument("--from-hopf", metavar="FILE:LABEL", help="a Hopf point of a continuation dataset, e.g. "
                                                                   "c.nc:HOPF1 (tippedisk continue)")
-    source.add_argument("--from-run", metavar="FILE", help="a simulation of an ODE model: Newton from a Poincaré "
-                                                           "return (tippedisk simulate)")
+    source.add_argument("--from-run", metavar="FILE", help="a simulation (tippedisk simulate): of an ODE model, Newton "
+                        "from a Poincaré return; of Models 1/2 (m1, m2, h1), the rolling motion at its end: its "
+                        "returns to gamma = pi/2, torus or orbit, and the orbit they wind around")
     source.add_argument("--system", help="a textbook system: vanderpol, hopf, bautin, roessler, torus, homoclinic")
     source.add_argument("--from-orbit", metavar="FILE:POINT", help="an orbit of a periodic_orbits dataset, e.g. "
                                                                     "b.nc:5 (corrected, then continued with --to)")
@@ -36,6 +37,9 @@ def _arguments(p) -> None:
     tip.add_argument("--crossing", type=int, default=-2, help="--from-run: the return to start from (default -2, "
                                                               "the last but one)")
     tip.add_argument("--section", default="beta_dot=0", help="--from-run: section NAME=LEVEL (default beta_dot=0)")
+    tip.add_argument("--returns-time", type=finite_float,
+                     help="--from-run of Models 1/2: seconds of rolling motion whose returns are analysed "
+                          "(default 500)")
     tip.add_argument("--max-iter", type=positive_int, default=25, help="Newton steps (default 25)")
     book = p.add_argument_group("--system / --from-orbit options")
     book.add_argument("--to", type=finite_float, help="continue the branch in the system's parameter to this value")
@@ -79,8 +83,7 @@ def periodic_orbits(args) -> int:
             raise ParameterError("--amplitudes must be positive numbers, e.g. 0.001,0.01")
         ds = orbits.tippedisk_orbits_from_hopf(results.load(path), label, amplitudes, max_iter=args.max_iter)
     elif args.from_run:
-        ds = orbits.tippedisk_orbits_from_run(results.load(args.from_run), crossing=args.crossing, section=args.section,
-                                          max_iter=args.max_iter)
+        ds = _from_run(args, results.load(args.from_run))
     elif args.from_orbit:
         path, _, point = args.from_orbit.rpartition(":")
         try:
@@ -190,3 +193,23 @@ def _orbit_or_branch(args, orbit, parameter: str, config: dict):
                                   segments=args.segments, phase=args.phase or "poincare", period_max=args.period_max,
                                   options=continuation.Options(ds=0.02, ds_max=0.1, max_points=args.max_points))
     return dy.branch_dataset(prob, br, {**config, "to": args.to})
+
+
+def _from_run(args, run):
+    from ..analysis import orbits, rolling
+    from ..results import config_of
+
+    model = config_of(run).get("model") if run.attrs.get("kind") == "simulation" else None
+    if model in rolling.ROLLING_RUNS:
+        if args.section != "beta_dot=0" or args.crossing != -2:
+            raise ParameterError("--section and --crossing belong to ODE runs; a rolling run's returns are to "
+                                 "gamma = pi/2 (give --returns-time)")
+        returns_time = rolling.RETURNS_TIME if args.returns_time is None else args.returns_time
+        if not returns_time > 0:
+            raise ParameterError(f"--returns-time {returns_time:g} must be positive, e.g. 500")
+        return rolling.orbits_from_run(run, returns_time=returns_time)
+    if args.returns_time is not None:
+        raise ParameterError(f"--returns-time is the rolling analysis of a run of Models 1/2 "
+                             f"({', '.join(rolling.ROLLING_RUNS)}); the run is of model {model!r}, which does not "
+                             "roll: drop --returns-time")
+    return orbits.tippedisk_orbits_from_run(run, crossing=args.crossing, section=args.section, max_iter=args.max_iter)

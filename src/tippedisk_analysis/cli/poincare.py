@@ -29,7 +29,8 @@ def add_section(p, t_end: float, t_transient: float, max_crossings: int | None) 
 
 def _arguments(p) -> None:
     add_initial_and_friction(p)
-    p.add_argument("--model", default="ode-euler", help="ode-euler (ode1) or ode-quaternion (ode2)")
+    p.add_argument("--model", default="ode-euler", help="ode-euler (ode1), ode-quaternion (ode2) or hybrid-euler (h1: set-valued "
+                   "Coulomb, rolling and sliding)")
     p.add_argument("--tol", type=finite_float, default=defaults.TAYLOR_TOL,
                    help=f"integrator tolerance (default {defaults.TAYLOR_TOL:g})")
     add_section(p, t_end=10.0, t_transient=0.0, max_crossings=None)

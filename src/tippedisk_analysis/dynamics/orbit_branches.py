@@ -42,21 +42,24 @@ from .system import System
 
 def orbit_problem(orbit: PeriodicOrbit, parameter: str, *, parameter_scale: float = 1.0, bounds: dict | None = None,
                   segments: int | None = None, phase: str = "poincare", period_max: float | None = None,
-                  tol: float = TAYLOR_TOL) -> tuple[ShootingProblem, np.ndarray]:
-    """The continuation problem through ``orbit`` in ``parameter`` and its start unknowns u0."""
+                  tol: float = TAYLOR_TOL, pinned=()) -> tuple[ShootingProblem, np.ndarray]:
+    """The continuation problem through ``orbit`` in ``parameter`` (a runtime parameter, a first integral's
+    level or a pinned state) and its start unknowns u0; ``pinned``: states held at the start orbit's values
+    (:class:`.shooting.ShootingProblem` pins)."""
     if not orbit.converged:
         raise ParameterError(f"the start is not a periodic orbit (status {orbit.status}): {orbit.message}")
     system = orbit.system
-    k = None if parameter in system.integrals else system.parameter_index(parameter)
+    pins = {name: float(orbit.states[0][system.state_index(name)]) for name in pinned}
+    k = None if parameter in system.integrals or parameter in pins else system.parameter_index(parameter)
     bounds = dict(bounds or {})
     if period_max is not None:
         bounds["T"] = (0.0, float(period_max))
     m = segments or len(orbit.states)
     levels = integral_levels(system, orbit.states[0], orbit.pars)
-    value = levels[parameter] if k is None else orbit.pars[k]
+    value = {**levels, **pins}[parameter] if k is None else orbit.pars[k]
     prob = ShootingProblem(system, orbit.pars, segments=m, phase=phase, parameter=parameter,
                            parameter_scale=parameter_scale, period_scale=orbit.period, bounds=bounds, tol=tol,
-                           levels=levels)
+                           levels=levels, pins=pins)
     u0 = (np.concatenate([orbit.states.ravel(), [orbit.period, value]]) if m == len(orbit.states)
           else prob.unknowns(orbit.states[0], orbit.period, value))
     return prob, u0
@@ -144,7 +147,7 @@ def switch_period_doubling(prob: ShootingProblem, br: continuation.Branch, label
                              bounds={("T" if i == prob.t_index else prob.parameter):
                                      ((2 * lo, 2 * hi) if i == prob.t_index else (lo, hi))
                                      for i, (lo, hi) in prob.bounds.items()}, tol=prob.flow.tol,
-                             samples=2 * prob.samples, levels=prob.levels)
+                             samples=2 * prob.samples, levels=prob.levels, pins=prob.pins)
     vk = [v]
     for k in range(m - 1):
         vk.append(_segment_phi(prob, u, k) @ vk[-1])

@@ -28,8 +28,9 @@ def branch_orbits(prob: ShootingProblem, br: continuation.Branch, n_samples: int
 
 
 def branch_dataset(prob: ShootingProblem, br: continuation.Branch, info: dict | None = None,
-                   n_samples: int = N_SAMPLES) -> xr.Dataset:
-    """A branch of periodic orbits as a dataset of kind ``periodic_orbits``."""
+                   n_samples: int = N_SAMPLES, extra=None) -> xr.Dataset:
+    """A branch of periodic orbits as a dataset of kind ``periodic_orbits``; ``extra(orbits)``: more variables
+    computed from the branch's orbits ({name: (dims, values, attrs)})."""
     orbits = branch_orbits(prob, br, n_samples)
     status = "completed" if br.status == "completed" else "partial"
     labels = ", ".join(f"{sp.label} at {prob.parameter} = {sp.u[prob.t_index + 1]:.10g}" for sp in br.special_points)
@@ -38,7 +39,7 @@ def branch_dataset(prob: ShootingProblem, br: continuation.Branch, info: dict | 
               "tol": prob.flow.tol, "bounds": {prob.names[i]: list(b) for i, b in prob.bounds.items()},
               **(info or {})}
     return orbits_dataset(orbits, status, message, config, special=br.special_points, prob=prob,
-                          arclength=br.array("arclength"))
+                          arclength=br.array("arclength"), extra=extra(orbits) if extra else None)
 
 
 def orbits_dataset(orbits: list[PeriodicOrbit], status: str, message: str, config: dict, *, special=(), prob=None,

@@ -31,7 +31,7 @@ STATUS = {"converged": 0, "equilibrium": 1, "not_converged": 2, "nonfinite": 3}
 
 def find_orbit(system: System, state, period: float, pars=None, *, segments: int = 1, phase: str = "poincare",
                shift=None, tol: float = TAYLOR_TOL, newton_tol: float = NEWTON_TOL,
-               max_iter: int = NEWTON_MAX_ITER, amplitude_tol: float = AMPLITUDE_TOL) -> PeriodicOrbit:
+               max_iter: int = NEWTON_MAX_ITER, amplitude_tol: float = AMPLITUDE_TOL, pinned=()) -> PeriodicOrbit:
     """A periodic orbit near (``state``, ``period``) by Newton's method; always returns a status.
 
     Gauss-Newton on the shooting equations with the phase condition fixed at the guess (least-squares
@@ -47,8 +47,9 @@ def find_orbit(system: System, state, period: float, pars=None, *, segments: int
     if state.shape != (system.n,) or not np.all(np.isfinite(state)):
         raise ParameterError(f"the state guess must be {system.n} finite numbers ({', '.join(system.state_names)})")
     levels = integral_levels(system, state, pars) if system.integrals else None
+    pins = {name: float(state[system.state_index(name)]) for name in pinned}
     prob = ShootingProblem(system, pars, segments=segments, phase=phase, period_scale=float(period), shift=shift,
-                           tol=tol, levels=levels)
+                           tol=tol, levels=levels, pins=pins)
     scale = prob.scale
     try:
         u = prob.unknowns(state, float(period))

@@ -3,7 +3,9 @@ record of an orbit (:class:`PeriodicOrbit`).
 
 m segments (m = 1: single shooting) of duration T/m from the points x_0 .. x_{m-1}; unknowns
 u = (x_0, .., x_{m-1}, T[, p]); equations phi(x_k, T/m) - x_{k+1} = 0 (x_m = x_0 + shift; shift: multiples of
-2 pi in angle components), a phase condition, and the levels of the system's first integrals:
+2 pi in angle components), a phase condition, the levels of the system's first integrals and of the pinned
+states (``pins``: x_0[i] = level, which picks one orbit of a family that no first integral labels, e.g. the
+symmetric orbits of a reversible system):
 
 * ``poincare``: (x_0 - x_ref) . f(x_ref) = 0, the hyperplane through the reference orbit's first point
   orthogonal to the flow there;
@@ -43,7 +45,7 @@ class ShootingProblem(continuation.Problem):
     def __init__(self, system: System, pars=None, *, segments: int = 1, phase: str = "poincare",
                  parameter: str | None = None, parameter_scale: float = 1.0, period_scale: float = 1.0,
                  bounds: dict | None = None, shift=None, tol: float = TAYLOR_TOL, samples: int = N_SAMPLES,
-                 levels: dict | None = None):
+                 levels: dict | None = None, pins: dict | None = None):
         if int(segments) != segments or segments < 1:
             raise ParameterError(f"segments = {segments!r}; give a positive integer")
         if phase not in ("poincare", "integral"):
@@ -54,7 +56,10 @@ class ShootingProblem(continuation.Problem):
         self.n = n = system.n
         self.pars = np.array(system.pars if pars is None else pars, dtype=float)
         self.integral_names = tuple(system.integrals)
-        self.level_parameter = parameter if parameter in self.integral_names else None
+        self.pins = {name: float(v) for name, v in (pins or {}).items()}
+        self._pin_index = [system.state_index(name) for name in self.pins]
+        self.level_names = (*self.integral_names, *self.pins)
+        self.level_parameter = parameter if parameter in self.level_names else None
         self.p_index = None if parameter is None or self.level_parameter else system.parameter_index(parameter)
         self.parameter = parameter
         self.levels = dict(levels or {})
@@ -97,18 +102,25 @@ class ShootingProblem(continuation.Problem):
         return pars
 
     def _level_rows(self, u, X0) -> tuple[np.ndarray, np.ndarray]:
-        """I_j(x_0) - c_j and their gradients (rows of the Jacobian) for the first integrals."""
-        k = len(self.integral_names)
+        """I_j(x_0) - c_j and their gradients (rows of the Jacobian) for the first integrals, then
+        x_0[i] - c_i for the pinned states."""
+        k = len(self.level_names)
         if not k:
             return np.empty(0), np.empty((0, len(u)))
-        pars = self.runtime(u)
-        values = self._integrals.values(X0, pars)
-        grads = self._integrals.tensor(X0, pars, 1, with_parameters=False)
         rows = np.zeros((k, len(u)))
-        rows[:, : self.n] = grads
-        target = np.array([self.levels.get(name, math.nan) for name in self.integral_names])
+        values = np.empty(k)
+        n_int = len(self.integral_names)
+        if n_int:
+            pars = self.runtime(u)
+            values[:n_int] = self._integrals.values(X0, pars)
+            rows[:n_int, : self.n] = self._integrals.tensor(X0, pars, 1, with_parameters=False)
+        for j, i in enumerate(self._pin_index):
+            values[n_int + j] = X0[i]
+            rows[n_int + j, i] = 1.0
+        target = np.array([self.levels.get(name, math.nan) for name in self.integral_names]
+                          + list(self.pins.values()))
         if self.level_parameter:
-            j = self.integral_names.index(self.level_parameter)
+            j = self.level_names.index(self.level_parameter)
             target[j] = u[self.t_index + 1]
             rows[j, self.t_index + 1] = -1.0
         return values - target, rows
@@ -223,13 +235,13 @@ class ShootingProblem(continuation.Problem):
     def residual(self, u) -> np.ndarray:
         ev = self._evaluate(u)
         if "error" in ev:
-            return np.full(self.n * self.m + 1 + len(self.integral_names), np.nan)
+            return np.full(self.n * self.m + 1 + len(self.level_names), np.nan)
         return np.concatenate([ev["F"], [self._phase_row(ev, u)[0]], self._level_rows(u, ev["X"][0])[0]])
 
     def jacobian(self, u) -> np.ndarray:
         ev = self._evaluate(u)
         if "error" in ev:
-            return np.full((self.n * self.m + 1 + len(self.integral_names), len(u)), np.nan)
+            return np.full((self.n * self.m + 1 + len(self.level_names), len(u)), np.nan)
         return np.vstack([ev["A"], self._phase_row(ev, u)[1], self._level_rows(u, ev["X"][0])[1]])
 
     def monodromy(self, u) -> np.ndarray:

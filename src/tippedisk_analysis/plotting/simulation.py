@@ -135,7 +135,7 @@ def simulation_figure(ds: xr.Dataset, companion: xr.Dataset | None = None, angle
     ax.set(xlabel=TIME_LABEL, ylabel=r"energy $E_\mathrm{pot}$, $E_\mathrm{tot}$ [J]")
     _legend_above(ax)
     if "mode" in ds:
-        _shade_sliding(axes.ravel(), ds)
+        shade_sliding(axes.ravel(), ds)
     if title is None:
         title = f"{main} ({ds.attrs.get('model', '')}): {ds.attrs.get('status', '')}"
         if companion is not None:
@@ -144,7 +144,7 @@ def simulation_figure(ds: xr.Dataset, companion: xr.Dataset | None = None, angle
     return fig
 
 
-def _shade_sliding(axes, ds: xr.Dataset) -> None:
+def shade_sliding(axes, ds: xr.Dataset) -> None:
     """The sliding intervals of an event-driven run (``switch_time`` / ``switch_mode``) shaded grey."""
     times = list(ds["switch_time"].values) + [float(ds["time"].values[-1])]
     sliding = [k for k, m in enumerate(ds["switch_mode"].values) if int(m) == 1]
@@ -152,6 +152,25 @@ def _shade_sliding(axes, ds: xr.Dataset) -> None:
         for n, k in enumerate(sliding):
             ax.axvspan(times[k], times[k + 1], color="0.85", zorder=0, lw=0, label="sliding" if n == 0 else None)
     axes[0].legend(fontsize=7, loc="lower right")
+
+
+def draw_convergence(ax, ds: xr.Dataset) -> None:
+    """Moreau Model 1's error against the event-driven model over its time steps (kind ``rolling_convergence``,
+    studies/rolling.py), with the first-order slope."""
+    dt, err = ds["dt"].values, ds["gamma_error"].values
+    ax.loglog(dt, err, "o-", label=ds["gamma_error"].attrs.get("long_name", "gamma error"))
+    ax.loglog(dt, err[0] * dt / dt[0], "k:", label="first order")
+    ax.set_xlabel("Moreau time step dt [s]")
+    ax.set_ylabel("[rad]")
+    ax.legend(fontsize=8)
+
+
+@figure("rolling_convergence")
+def rolling_convergence_figure(ds: xr.Dataset):
+    fig, ax = plt.subplots(figsize=(6, 4.5), constrained_layout=True)
+    draw_convergence(ax, ds)
+    ax.set_title("Moreau Model 1 against hybrid-euler (h1)")
+    return fig
 
 
 def disk_of(ds: xr.Dataset) -> dict | None:

@@ -50,7 +50,14 @@ MAX_SWITCHES = 10_000
 ONSET_SLIP = 1e-9  # [m/s] the slip speed a slip starts with (module docstring)
 ROUND_OFF_TIME = 1e-12  # [s] (relative to t) a mode held no longer than this is no switch (round-off at s = 0)
 N_ROLL, N_SLIDE = len(rolling.STATE_NAMES), len(sliding.STATE_NAMES)
+VARIABLE_ATTRS = {  # the variables of the hybrid model that the other models lack
+    "lambda_Tx": {"units": "N", "long_name": "tangential contact force at C1, x-component (I-frame)"},
+    "lambda_Ty": {"units": "N", "long_name": "tangential contact force at C1, y-component (I-frame)"},
+    "cone_margin": {"units": "N", "long_name": "mu lambda_N - |lambda_T| (>= 0: rolling is consistent; 0 while "
+                                               "sliding)"},
+}
 ENDINGS = {-1: "fell", -2: "lift_off"}  # terminal events 0 and 1 of both modes
+LEVEL_INDEX = len(ode.PARAMETER_NAMES)  # hy.par index of a section's level
 
 
 @dataclass(frozen=True)
@@ -59,22 +66,50 @@ class Compiled:
     sliding: object
     rolling_outputs: object  # cfuncs: rolling.OUTPUT_NAMES; ode.OUTPUT_NAMES + (x_dot, y_dot)
     sliding_outputs: object
+    section: tuple | None = None  # (quantity, modulo, direction): a Poincaré section recorded in both modes
+
+
+SLIDING_OUTPUTS = (*ode.OUTPUT_NAMES, "x_dot", "y_dot")
+SECTION_QUANTITIES = tuple(dict.fromkeys((*rolling.STATE_NAMES, *rolling.OUTPUT_NAMES)))
+"""What a section of the hybrid model may cut: the quantities both modes have (a state or an output)."""
+
+
+def _mode_quantity(variables, names, outputs, output_names, quantity: str):
+    return variables[names.index(quantity)] if quantity in names else outputs[output_names.index(quantity)]
 
 
 @functools.lru_cache(maxsize=None)
-def compiled(tol: float) -> Compiled:
+def compiled(tol: float, section: tuple | None = None) -> Compiled:
+    """The two modes' integrators; with ``section`` = (quantity, modulo, direction) both also record the
+    crossings of quantity = hy.par[LEVEL_INDEX] (:class:`tippedisk_analysis.dynamics.poincare.Recorder`)."""
+    from ..dynamics.poincare import Recorder
+
     neg = hy.event_direction.negative
     rv, rsys, rfall, rout, cone = rolling.system()
     sv, ssys, sfall, sout = sliding.system()
     pars = ode.parameter_vector()
-    with compiling(f"the hybrid model's integrators (rolling and sliding, tol {tol:g})"):
+    nt = {"rolling": [], "sliding": []}
+    if section is not None:
+        quantity, modulo, direction = section
+        if quantity not in SECTION_QUANTITIES:
+            raise ParameterError(f"section quantity {quantity!r} is not one of the hybrid model's; choose one of "
+                                 f"{', '.join(SECTION_QUANTITIES)}")
+        level = hy.par[LEVEL_INDEX]
+        hy_dir = {"positive": hy.event_direction.positive, "negative": neg, "any": hy.event_direction.any}[direction]
+        for mode, (v, names, out, out_names) in {"rolling": (rv, rolling.STATE_NAMES, rout, rolling.OUTPUT_NAMES),
+                                                 "sliding": (sv, sliding.STATE_NAMES, sout, SLIDING_OUTPUTS)}.items():
+            q = _mode_quantity(v, names, out, out_names, quantity)
+            nt[mode] = [hy.nt_event(hy.sin(q - level) if modulo else q - level, Recorder(), direction=hy_dir)]
+        pars = np.append(pars, 0.0)
+    with compiling(f"the hybrid model's integrators (rolling and sliding, tol {tol:g}"
+                   + (f", section {section[0]})" if section else ")")):
         roll = hy.taylor_adaptive(rsys, np.zeros(N_ROLL), pars=pars, tol=tol, compact_mode=False, t_events=[
             hy.t_event(rfall, direction=neg), hy.t_event(rout[rolling.OUTPUT_NAMES.index("lambda_N")], direction=neg),
-            hy.t_event(cone, direction=neg)])
+            hy.t_event(cone, direction=neg)], nt_events=nt["rolling"])
         slide = hy.taylor_adaptive(ssys, np.zeros(N_SLIDE), pars=pars, tol=tol, compact_mode=False, t_events=[
             hy.t_event(sfall, direction=neg), hy.t_event(sout[ode.OUTPUT_NAMES.index("lambda_N")], direction=neg),
-            hy.t_event(sv[sliding.STATE_NAMES.index("slip_speed")], direction=neg)])
-        return Compiled(roll, slide, hy.cfunc(rout, rv), hy.cfunc(sout, sv))
+            hy.t_event(sv[sliding.STATE_NAMES.index("slip_speed")], direction=neg)], nt_events=nt["sliding"])
+        return Compiled(roll, slide, hy.cfunc(rout, rv), hy.cfunc(sout, sv), section)
 
 
 def _outputs(cfunc, states: np.ndarray, pars: np.ndarray) -> np.ndarray:
@@ -97,13 +132,22 @@ class Segment:
 
 
 def integrate(setup: Setup, initial: InitialState, t_end: float, dt_output: float, tol: float, fall_angle: float,
-              slip_smoothing: float, max_switches: int = MAX_SWITCHES):
-    """The run on the output grid: (segments, switches [(time, new mode)], status, message, t_final)."""
-    cm = compiled(tol)
+              slip_smoothing: float, max_switches: int = MAX_SWITCHES, section=None):
+    """The run on the output grid: (segments, switches [(time, new mode)], status, message, t_final,
+    {mode: integrator}); with ``section`` = (quantity, modulo, direction, level, t_transient) the integrators'
+    recorders hold the section's crossings."""
+    cm = compiled(tol, None if section is None else tuple(section[:3]))
     pars = ode.parameter_vector(setup, fall_angle, slip_smoothing)
     roll, slide = copy.copy(cm.rolling), copy.copy(cm.sliding)
     for ta in (roll, slide):
-        ta.pars[:] = pars
+        if section is None:
+            ta.pars[:] = pars
+        else:
+            ta.pars[:] = np.append(pars, section[3])
+            rec = ta.nt_events[0].callback
+            rec.t_transient, rec.level, rec.modulo, rec.times, rec.states = section[4], section[3], section[1], [], []
+            if section[1]:
+                rec.q_index = rolling.STATE_NAMES.index(section[0])  # modulo: an angle, the same index in both modes
     grid = output_grid(t_end, dt_output)
     x = rolling.initial_state_vector(initial)
     margin, phi = _onset_angle(cm, x, pars)
@@ -158,7 +202,7 @@ def integrate(setup: Setup, initial: InitialState, t_end: float, dt_output: floa
                 state = np.concatenate([x, [ONSET_SLIP, phi, work]])
         spans.append((t, mode))
         n_events += 1
-    return segments, _switches(spans), status, message, t
+    return segments, _switches(spans), status, message, t, {"rolling": roll, "sliding": slide}
 
 
 def _switches(spans: list) -> list:
@@ -182,7 +226,7 @@ def run(setup: Setup, initial: InitialState, t_end: float, *, dt_output: float =
                              f"Euler-angle singularity); give e.g. {FALL_ANGLE:g}")
     if not (isinstance(max_switches, int) and max_switches > 0):
         raise ParameterError(f"max_switches = {max_switches!r} must be a positive integer")
-    segments, switches, status, message, t_final = integrate(setup, initial, t_end, dt_output, tol, fall_angle,
+    segments, switches, status, message, t_final, _ = integrate(setup, initial, t_end, dt_output, tol, fall_angle,
                                                              slip_smoothing, max_switches)
     pars = ode.parameter_vector(setup, fall_angle, slip_smoothing)
     cm = compiled(tol)
@@ -214,11 +258,38 @@ def run(setup: Setup, initial: InitialState, t_end: float, *, dt_output: float =
     ds = xr.Dataset(variables, coords={"time": time},
                     attrs=make_attrs("simulation", config, status, message, model="hybrid-euler",
                                      paper_model="event-driven Models 1/2", **extra))
-    ds["lambda_Tx"].attrs.update(units="N", long_name="tangential contact force at C1, x-component (I-frame)")
-    ds["lambda_Ty"].attrs.update(units="N", long_name="tangential contact force at C1, y-component (I-frame)")
-    ds["cone_margin"].attrs.update(units="N", long_name="mu lambda_N - |lambda_T| (>= 0: rolling is consistent; 0 "
-                                                        "while sliding)")
+    for name, attrs in VARIABLE_ATTRS.items():
+        ds[name].attrs.update(attrs)
     return describe(ds)
+
+
+def section_crossings(setup: Setup, initial: InitialState, quantity: str, level: float, *, modulo: bool = False,
+                      direction: str = "positive", t_transient: float = 0.0, t_end: float = 10.0,
+                      tol: float = TAYLOR_TOL, fall_angle: float = FALL_ANGLE,
+                      slip_smoothing: float = SLIP_SMOOTHING, max_switches: int = MAX_SWITCHES) -> dict:
+    """The crossings of ``quantity`` = ``level`` by the hybrid run, located by events in whichever mode holds
+    them: {"time", "mode", "data" (the common variables at each crossing), "status", "message", "t_final",
+    "switches"}."""
+    if modulo and quantity not in rolling.STATE_NAMES[2:5]:
+        raise ParameterError(f"a 'mod 2pi' section needs an angle (alpha, beta, gamma), not {quantity!r}")
+    section = (quantity, bool(modulo), direction, float(level), float(t_transient))
+    _seg, switches, status, message, t_final, integrators = integrate(
+        setup, initial, t_end, t_end, tol, fall_angle, slip_smoothing, max_switches, section=section)
+    cm = compiled(tol, section[:3])
+    pars = ode.parameter_vector(setup, fall_angle, slip_smoothing)
+    parts = []
+    for mode, ta in integrators.items():
+        rec = ta.nt_events[0].callback
+        if rec.times:
+            seg = Segment(mode, np.array(rec.times), np.array(rec.states), math.nan)
+            parts.append(_segment_data(cm, seg, pars))
+    data = {name: np.concatenate([p[name] for p in parts]) for name in parts[0]} if parts else {}
+    order = np.argsort(data["time"]) if data else np.array([], int)
+    data = {name: values[order] for name, values in data.items()}
+    time, mode = data.pop("time", np.array([])), data.pop("mode", np.array([], np.int8))
+    data.pop("W_friction", None)  # the work is not integrated through the sliding recorder's states alone
+    return {"time": time, "mode": mode.astype(np.int8), "data": data, "status": status, "message": message,
+            "t_final": t_final, "switches": switches}
 
 
 def _segment_data(cm: Compiled, seg: Segment, pars: np.ndarray) -> dict:

@@ -1,0 +1,165 @@
+"""The set-valued tippedisk after the inversion (docs/rolling.md): the event-driven model against Moreau Models
+1/2, the rolling motion as an invariant torus about an elliptic periodic orbit, and the orbit family in the
+energy and the spin with the boundary where rolling stops being consistent with Coulomb's cone.
+
+    tippedisk study rolling [--output-dir DIR] [--quick]
+
+Writes rolling_convergence.nc (Moreau Model 1 against the hybrid model for three time steps), rolling_orbit.nc
+(the torus of the Table 3 run: its returns to gamma = pi/2, the central orbit), rolling_family_energy.nc and
+rolling_family_spin.nc (the family with the smallest cone margin per orbit), and the figures
+rolling_inversion.png, rolling_section.png, rolling_family.png.
+"""
+
+from __future__ import annotations
+
+import sys
+
+import matplotlib.pyplot as plt
+import numpy as np
+import xarray as xr
+from tippedisk_studies._common import prepare, save
+
+import tippedisk_analysis as td
+from tippedisk_analysis import dynamics as dy
+from tippedisk_analysis.analysis import rolling as ar
+from tippedisk_analysis.dynamics.orbits import monodromy_fd
+from tippedisk_analysis.plotting.simulation import draw_convergence, shade_sliding
+from tippedisk_analysis.results import make_attrs
+
+T_RUN = 8.0  # [s] the Table 3 run through the inversion
+T_COMPARE = 1.0  # [s] the window of the Moreau error
+MOREAU_DTS = (1e-4, 1e-5, 1e-6)
+SMALL_TORI = (1e-2, 3e-3, 1e-3)  # displacements from the central orbit along its elliptic eigenvector
+
+
+def convergence(runs: dict, hybrid: xr.Dataset) -> xr.Dataset:
+    """max |gamma_M1 - gamma_h1| on [0, T_COMPARE] and E_tot at the end, per Moreau time step."""
+    t = hybrid.time.values
+    window = t <= T_COMPARE + 1e-9
+    err, energy = [], []
+    for dt in MOREAU_DTS:
+        m1 = runs[dt].interp(time=t[window])
+        err.append(float(np.max(np.abs(m1.gamma.values - hybrid.gamma.values[window]))))
+        energy.append(float(runs[dt].E_tot[-1]))
+    config = {"t_compare": T_COMPARE, "t_run": T_RUN, "hybrid_config": hybrid.attrs.get("config", "")}
+    return xr.Dataset(
+        {"gamma_error": ("dt", np.array(err), {"units": "rad", "long_name": "max |gamma_M1 - gamma_h1| on [0, 1] s"}),
+         "E_tot_end": ("dt", np.array(energy), {"units": "J", "long_name": f"E_tot of Model 1 at t = {T_RUN:g} s"}),
+         "E_tot_end_hybrid": ((), float(hybrid.E_tot[-1]), {"units": "J", "long_name": "E_tot of h1 at the end"})},
+        coords={"dt": ("dt", np.array(MOREAU_DTS), {"units": "s", "long_name": "Moreau time step"})},
+        attrs=make_attrs("rolling_convergence", config, "completed",
+                         "Moreau Model 1 against the event-driven model (hybrid-euler)"))
+
+
+def inversion_figure(hybrid, m1, m2, conv):
+    fig, ax = plt.subplots(3, 1, figsize=(8, 8.5), constrained_layout=True)
+    for ds, label, style in ((hybrid, "hybrid-euler (h1)", "-"), (m1, "Moreau Model 1, dt = 1e-5 s", "--"),
+                             (m2, "Moreau Model 2, dt = 1e-5 s", ":")):
+        ax[0].plot(ds.time, ds.gamma, style, label=label)
+        ax[2].plot(ds.time, ds.E_tot, style, label=label)
+    for a in (ax[0], ax[2]):
+        a.legend(fontsize=8)
+        a.set_xlabel("t [s]")
+    shade_sliding([ax[0], ax[2]], hybrid)
+    ax[0].set_xlim(0, 2)
+    ax[0].set_ylabel("gamma [rad]")
+    ax[0].set_title("through the inversion (shaded: h1 slides)")
+    draw_convergence(ax[1], conv)
+    ax[2].set_ylabel("E_tot [J]")
+    ax[2].set_ylim(float(hybrid.E_tot[-1]) - 0.01, float(hybrid.E_tot[0]) + 0.005)
+    return fig
+
+
+def small_tori(orbit, t_end: float) -> list:
+    """Sections of the motions started at the central orbit displaced along its elliptic eigenvector."""
+    system = ar.reduced_system()
+    x0 = orbit.states[0]
+    ev, V = np.linalg.eig(monodromy_fd(system, x0, orbit.period, orbit.pars))
+    v = V[:, int(np.argmax(ev.imag))].real
+    v /= np.linalg.norm(v / np.asarray(system.state_scale))
+    return [(a, ar.section(x0 + a * v, t_end=t_end)) for a in SMALL_TORI]
+
+
+def section_figure(orbit_ds, tori, orbit):
+    fig, ax = plt.subplots(figsize=(7, 5.5), constrained_layout=True)
+    names = list(orbit_ds.state.values)
+    X = orbit_ds.return_state.values
+    ib, iy = names.index("beta"), names.index("omega_y")
+    rho = float(orbit_ds.rotation_number)
+    ax.plot(X[:, ib], X[:, iy], ".", ms=2, label=f"Table 3 run after the inversion (rotation number {rho:.6f})")
+    for a, sec in tori:
+        m = ar.identify(sec)
+        ax.plot(sec.beta, sec.omega_y, ".", ms=1.5, label=f"displaced {a:g} from the orbit ({m.kind}, "
+                                                          f"{m.rotation_number:.6f})")
+    x0 = orbit.states[0]
+    ax.plot(x0[0], x0[3], "k*", ms=10, label=f"elliptic orbit T = {orbit.period:.5f} s, Floquet angle "
+                                            f"{ar.floquet_angle(orbit):.6f}")
+    ax.set_xlabel("beta [rad]")
+    ax.set_ylabel("omega_y [rad/s]")
+    ax.set_title("returns of the rolling motion to gamma = pi/2 (upwards)")
+    ax.legend(fontsize=7)
+    return fig
+
+
+def family_figure(families):
+    fig, ax = plt.subplots(2, 2, figsize=(10, 7), constrained_layout=True, sharex="col")
+    for j, ds in enumerate(families):
+        p = ds.attrs["parameter"]
+        x = ds[p].values
+        ax[0, j].plot(x, ds.min_cone_margin, ".-", label="smallest mu lambda_N - |lambda_T| on the orbit")
+        ax[0, j].plot(x, ds.min_lambda_N, ".-", label="smallest lambda_N")
+        ax[0, j].axhline(0, color="k", lw=0.8)
+        for b in ar.consistency_boundary(ds):
+            ax[0, j].axvline(b, color="tab:red", ls=":", label=f"rolling consistent up to {b:.5g}")
+        start = float(x[np.argmin(np.abs(ds.arclength.values))])
+        ax[0, j].axvline(start, color="0.5", ls="--", label="the orbit at the torus's centre")
+        ax[0, j].set_ylabel("[N]")
+        ax[0, j].legend(fontsize=7)
+        ax[1, j].plot(x, ds.period, ".-")
+        ax[1, j].set_ylabel("period [s]")
+        ax[1, j].set_xlabel({"E_tot": "E_tot [J] (omega_x at x_0 held)",
+                             "omega_x": "omega_x at x_0, the orbit's first point (gamma ~ pi/2) [rad/s] (E_tot "
+                                        "held)"}[p])
+    ax[0, 0].set_title("the family in the energy")
+    ax[0, 1].set_title("the family in the spin")
+    return fig
+
+
+def main(output_dir: str = "output", quick: bool = False):
+    out = prepare(output_dir)
+    t_run = 2.0 if quick else T_RUN
+    hybrid = td.simulate("h1", t_run)
+    print(f"h1: {hybrid.attrs['message']}")
+    runs = {dt: td.simulate("m1", t_run, dt=dt) for dt in MOREAU_DTS}
+    m2 = td.simulate("m2", t_run, dt=1e-5)
+    conv = convergence(runs, hybrid)
+    td.save(conv, out / "rolling_convergence.nc")
+    for dt, e in zip(MOREAU_DTS, conv.gamma_error.values):
+        print(f"dt = {dt:g} s: max |gamma_M1 - gamma_h1| on [0, 1] s = {e:.4g} rad, E_tot(end) M1 "
+              f"{float(runs[dt].E_tot[-1]):.9f} J")
+    save(inversion_figure(hybrid, runs[1e-5], m2, conv), out / "rolling_inversion.png")
+
+    orbit_ds = ar.orbits_from_run(hybrid, returns_time=200.0 if quick else ar.RETURNS_TIME)
+    td.save(orbit_ds, out / "rolling_orbit.nc")
+    print(f"rolling_orbit: {orbit_ds.attrs['message']}")
+    orbit = dy.find_orbit(ar.reduced_system(), orbit_ds.initial_state.values[0],
+                                   float(orbit_ds.period[0]), orbit_ds.runtime_parameters.values[0],
+                                   pinned=("omega_x",))
+    tori = small_tori(orbit, 200.0 if quick else 300.0)
+    for a, sec in tori:
+        print(f"displaced by {a:g}: {ar.identify(sec).message}")
+    save(section_figure(orbit_ds, tori, orbit), out / "rolling_section.png")
+
+    families = []
+    for parameter, bounds in (("E_tot", (0.30, 0.50)), ("omega_x", (30.0, 50.0))):
+        ds = ar.family(orbit, parameter, bounds, max_points=4 if quick else 40)
+        td.save(ds, out / f"rolling_family_{'energy' if parameter == 'E_tot' else 'spin'}.nc")
+        boundary = ", ".join(f"{b:.6g}" for b in ar.consistency_boundary(ds)) or "none"
+        print(f"family in {parameter}: {ds.attrs['message']}; rolling stops being consistent at {boundary}")
+        families.append(ds)
+    save(family_figure(families), out / "rolling_family.png")
+    return out
+
+
+if __name__ == "__main__":
+    main(*sys.argv[1:2])
