@@ -3,6 +3,7 @@
 #   bash run.sh demo       run the main job: the Table 3 simulation -> output/fig13_ode_inversion.{nc,png}
 #   bash run.sh test       the test suite a developer runs in the loop (long checks marked slow left out)
 #   bash run.sh test-all   every test, slow checks included (what CI runs)
+#   bash run.sh docs       the documentation site, warnings as errors -> docs/_build/html/index.html
 # Extra arguments after test / test-all go to pytest.
 set -euo pipefail
 cd "$(dirname "$0")"
@@ -13,7 +14,7 @@ fi
 # reinstall only when pyproject.toml changed (the install is editable: source changes need none)
 stamp=".venv/.installed-$(sha256sum pyproject.toml | cut -c1-16)"
 if [ ! -e "$stamp" ]; then
-    .venv/bin/python -m pip install --quiet --disable-pip-version-check -e ".[test]"
+    .venv/bin/python -m pip install --quiet --disable-pip-version-check -e ".[test,docs]"
     rm -f .venv/.installed-* && touch "$stamp"
 fi
 # the CF checker of the slow tests (tests/test_cf.py): cfchecker in its own venv (it pins its own numpy),
@@ -31,5 +32,7 @@ case "${1:-demo}" in
     demo) .venv/bin/tippedisk study fig13_ode_inversion --output-dir output ;;
     test) shift; .venv/bin/python -m pytest "$@" ;;
     test-all) shift; cf_checker; .venv/bin/python -m pytest --slow "$@" ;;
-    *) echo "usage: bash run.sh [demo|test|test-all [pytest args]]" >&2; exit 2 ;;
+    docs) .venv/bin/python -m sphinx -W --keep-going -q -b html docs docs/_build/html
+          echo "site: docs/_build/html/index.html" ;;
+    *) echo "usage: bash run.sh [demo|test|test-all [pytest args]|docs]" >&2; exit 2 ;;
 esac

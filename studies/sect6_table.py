@@ -5,8 +5,8 @@ normalised), stores a compact copy of each run (sect6_<run>.nc: angles, z_S, ene
 on [0, 5] s, 10-ms samples after; float32), computes the table from those copies only, and writes it as
 sect6_table.md and a scorecard figure. The stored copies of a full run live in data/sect6/; the test
 tests/test_paper_table.py recomputes the table from them and checks it against studies/README.md and
-README.md. Fig. 13 and Fig. 17 statements read fig13_ode_inversion.nc and fig17_stroboscope.nc (their own
-studies; data/).
+docs/paper.md. Fig. 13 and Fig. 17 statements read fig13_ode_inversion.nc and fig17_stroboscope.nc (their
+own studies; data/).
 
     tippedisk study sect6_table [--output-dir DIR] [--quick]
 """
@@ -414,7 +414,7 @@ def scorecard(rows: list[Row]):
 
 
 def update_readmes(root: Path | None = None) -> str:
-    """Recompute the table from data/ and write it into the marked blocks of studies/README.md and README.md
+    """Recompute the table from data/ and write it into the marked blocks of studies/README.md and docs/paper.md
     (what tests/test_paper_table.py checks). Returns the summary line."""
     root = Path(root) if root else Path(__file__).resolve().parents[1]
     data = root / "data"
@@ -422,7 +422,7 @@ def update_readmes(root: Path | None = None) -> str:
         rows = table_rows(load_runs(data / "sect6"), td.load(data / "fig13_ode_inversion.nc"),
                           td.load(data / "fig17_stroboscope.nc"), td.load(data / "rolling" / "rolling_orbit.nc"))
     blocks = {root / "studies" / "README.md": ("sect6-table", markdown(rows) + "\n\n" + summary(rows)),
-              root / "README.md": ("sect6-summary", summary(rows) + "\n\n" + markdown_short(rows))}
+              root / "docs" / "paper.md": ("sect6-summary", summary(rows) + "\n\n" + markdown_short(rows))}
     for path, (name, body) in blocks.items():
         text = path.read_text()
         begin, end = f"<!-- {name}:begin -->\n", f"\n<!-- {name}:end -->"

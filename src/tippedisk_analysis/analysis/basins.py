@@ -27,6 +27,8 @@ from .attractor_runs import (MATCH_THRESHOLD, POINT_VARIABLES, attractor_table, 
                              labels, outcome_flags, problem, recurrence_settings, run_points, summary,
                              table_coords, warm_up)
 
+__all__ = ["basins", "basin_fractions"]
+
 # --------------------------------------------------------------- basins over initial conditions
 INITIAL = {
     # name: (units, long_name, InitialState field, Table 3 value)

@@ -30,6 +30,8 @@ from ..results import VARIABLES, describe, make_attrs
 from ..dynamics import sweeps
 from . import poincare
 
+__all__ = ["bifurcation_diagram"]
+
 STATUS = {"completed": 0, "fell": 1, "nonfinite": 2}
 ANGLES = ("alpha", "gamma")  # stored wrapped into (-pi, pi] as ``value``
 CHUNK_SIZE = 8

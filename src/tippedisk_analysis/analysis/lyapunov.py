@@ -26,6 +26,8 @@ from ..results import make_attrs
 from ..dynamics import sweeps
 from .orbits import tippedisk_system
 
+__all__ = ["tippedisk_spectrum", "textbook_spectrum", "lyapunov_map"]
+
 OUTCOMES = {"completed": 0, "fell": 1, "lift_off": 2, "failed": 3}
 
 

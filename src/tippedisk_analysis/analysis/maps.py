@@ -33,6 +33,8 @@ from ..results import index_coordinate, make_attrs
 from . import reduced, stability
 from . import stationary as st
 
+__all__ = ["stability_map", "critical_speeds", "find_critical_speeds", "critical_speed_curves"]
+
 BRANCH_NAMES = tuple(st.BRANCHES)
 CRITICAL_PAD = -1.0e30  # padding of omega_critical beyond n_critical (not a _FillValue: never masked to NaN)
 STABILITY_BLOCK = 32_768
@@ -209,7 +211,7 @@ def critical_speeds(ds: xr.Dataset, *, setup: Setup | None = None, slip_smoothin
 
     Returns ``omega_critical`` [rad/s] (branch, other dims, crossing), padded with
     CRITICAL_PAD beyond ``n_critical``; ``critical_direction`` (+1: stable above Omega_c,
-    -1: unstable above, 0: padding) and ``critical_frequency`` = |Im| of the eigenvalue
+    -1: unstable above, 0: padding) and ``critical_frequency`` = ``|Im|`` of the eigenvalue
     crossing the imaginary axis [rad/s] (0 for a real eigenvalue, > 0 for a Hopf pair).
     """
     setup = setup or Setup()
@@ -275,7 +277,7 @@ def find_critical_speeds(branch: str, omega, setup: Setup | None = None,
                          slip_smoothing: float = SLIP_SMOOTHING) -> list[tuple[float, int, float]]:
     """Critical spin speeds of one branch for one parameter set, searched on the grid ``omega``:
     a list of (Omega_c [rad/s], direction (+1 stabilising, -1 destabilising with increasing Omega),
-    |Im s| of the crossing eigenvalue [rad/s])."""
+    ``|Im s|`` of the crossing eigenvalue [rad/s])."""
     st.branch_sign(branch)
     omega = _as_axis(omega, "omega")
     pars = ode.parameter_vector(setup, slip_smoothing=slip_smoothing)

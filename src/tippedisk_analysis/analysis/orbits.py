@@ -30,6 +30,9 @@ from ..parameters import Setup, setup_from_dict, to_dict
 from ..results import index_coordinate
 from . import reduced
 
+__all__ = ["tippedisk_system", "tippedisk_orbits_from_hopf", "tippedisk_orbits_from_run", "tippedisk_lyapunov_orbit",
+    "tippedisk_lyapunov_family", "tippedisk_branch_dataset", "orbit_from_dataset"]
+
 TIPPEDISK_SCALE = reduced.STATE_SCALE
 
 

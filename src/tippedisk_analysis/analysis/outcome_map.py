@@ -55,6 +55,8 @@ from . import outcome_rules as rules
 from .outcome_config import FILL_TIME, INITIAL_AXES, MODEL, OUTCOMES, SWEEPABLE, MapConfig, prepare
 from .outcome_rules import BYTES_PER_POINT, RESULT_VARIABLES, kernel
 
+__all__ = ["outcome_map"]
+
 
 def run_chunk(config: MapConfig | dict, start: int, stop: int) -> dict:
     """Outcome of grid points [start, stop), by rules (:mod:`.outcome_rules`) or by attractors.

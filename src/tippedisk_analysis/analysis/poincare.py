@@ -38,6 +38,8 @@ from ..models.variables import quantities
 from ..parameters import InitialState, Setup, to_dict
 from ..results import describe, index_coordinate, make_attrs
 
+__all__ = ["Section", "parse_section", "poincare_section", "crossings"]
+
 DIRECTIONS = ("positive", "negative", "any")
 LEVEL_INDEX = len(ode.PARAMETER_NAMES)  # hy.par index of the section level
 

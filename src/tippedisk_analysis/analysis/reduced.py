@@ -41,6 +41,8 @@ from ..dynamics import Event, System
 from ..dynamics.tensors import Field
 from ..models import ode
 
+__all__ = ["system", "evaluate", "jacobian", "reduced_from_full", "full_from_reduced"]
+
 STATE_NAMES = ("beta", "gamma", "u_x", "u_y", "omega_x", "omega_y", "omega_z")
 STATE_UNITS = {"beta": "rad", "gamma": "rad", "u_x": "m s-1", "u_y": "m s-1", "omega_x": "rad s-1",
                "omega_y": "rad s-1", "omega_z": "rad s-1"}

@@ -29,6 +29,10 @@ from ..models.ode import Trig
 from ..models.variables import PARAMETER_UNITS
 from .reduced import STATE_UNITS
 
+__all__ = ["reduced_system", "spin_state", "spin_eigenvalues", "section", "identify", "Motion", "weighted_birkhoff",
+    "central_orbit", "floquet_angle", "consistency", "motion_consistency", "rolling_start", "orbits_from_run",
+    "family", "consistency_boundary"]
+
 STATE_NAMES = ("beta", "gamma", "omega_x", "omega_y", "omega_z")
 BRANCHES = {"noninverted": -1.0, "inverted": 1.0}  # sin(gamma) of the spin: S below / above G
 
@@ -37,7 +41,7 @@ BRANCHES = {"noninverted": -1.0, "inverted": 1.0}  # sin(gamma) of the spin: S b
 def reduced_system() -> System:
     """The rolling disk's (beta, gamma, omega) as a :class:`~tippedisk_analysis.dynamics.System` with the energy
     E_tot as a first integral (two trivial Floquet multipliers: the flow and the energy family), observables
-    E_tot, lambda_N, cone_margin (mu lambda_N - |lambda_T|), alpha_dot, z_S, and the events of the rolling model
+    E_tot, lambda_N, cone_margin (``mu lambda_N - |lambda_T|``), alpha_dot, z_S, and the events of the rolling model
     (fell, lift_off, slip: the cone reached)."""
     beta, gamma, wx, wy, wz = hy.make_vars(*STATE_NAMES)
     fall_angle = hy.par[rolling.PARAMETER_NAMES.index("fall_angle")]
@@ -225,7 +229,7 @@ def motion_consistency(state, duration: float, pars=None) -> dict:
 
 
 def consistency(orbit: dy.PeriodicOrbit, n_samples: int = 2000) -> dict:
-    """The smallest cone margin mu lambda_N - |lambda_T| [N] and normal force lambda_N [N] along ``orbit``
+    """The smallest cone margin ``mu lambda_N - |lambda_T|`` [N] and normal force lambda_N [N] along ``orbit``
     (``n_samples`` points over the period) and the state where the margin is smallest."""
     system = orbit.system
     flow = dy.Flow(system)

@@ -37,6 +37,8 @@ from ..dynamics.equilibria import EquilibriumProblem, Parameter
 from . import reduced, stability
 from . import stationary as st
 
+__all__ = ["continue_branch", "continue_curve", "continue_from_point"]
+
 PARAMETERS = {  # name: (units, long_name, scale of the arclength metric, default bounds of curves)
     "omega": ("rad s-1", "spin rate alpha_dot = Omega", 10.0, (0.0, 200.0)),
     "eps": ("m s-1", "smoothing velocity eps of (2.29)", 0.1, (1e-3, 1.0)),

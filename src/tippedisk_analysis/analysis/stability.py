@@ -41,6 +41,8 @@ from ..dynamics.spectra import STABILITY_FLAGS, classify  # noqa: F401 (stabilit
 from . import stationary as st
 from .reduced import N_STATE, OMEGA_X_INDEX, jacobian
 
+__all__ = ["Spectrum", "spectrum", "max_real_eig", "nontrivial_eigenvalues", "modal_coordinates"]
+
 N_EIG = N_STATE - 1  # nontrivial eigenvalues (structural zero of the spin family removed)
 KEEP = [i for i in range(N_STATE) if i != OMEGA_X_INDEX]
 

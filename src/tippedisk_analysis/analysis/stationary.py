@@ -29,6 +29,8 @@ from ..errors import ParameterError
 from ..models import ode
 from .reduced import N_STATE, OMEGA_X_INDEX, alpha_dot_gradient, evaluate, jacobian
 
+__all__ = ["stationary_state", "Equilibrium", "solve"]
+
 BRANCHES = {"noninverted": -1.0, "inverted": +1.0}  # sign of gamma = sign * pi/2 (Fig. 6)
 
 
@@ -78,7 +80,7 @@ def solve(guess, omega: float, pars=None, *, tol: float = NEWTON_TOL, max_iter: 
     along d/dOmega). The step solves the 8x7 linear least-squares problem with the exact
     Jacobian (:mod:`.stability`), which converges quadratically to a zero-residual solution.
     Converged when the step is below ``tol`` (relative) and the residual is at round-off level
-    (1e-12 |J| (1 + |x|)). Otherwise the status says why: "no_equilibrium" (Gauss-Newton
+    (``1e-12 |J| (1 + |x|)``). Otherwise the status says why: "no_equilibrium" (Gauss-Newton
     stalled at a least-squares minimum with a finite residual), "max_iter", "singular"
     (rank-deficient step), "nonfinite", or "lift_off" (converged with lambda_N <= 0: outside the
     bilateral model).

@@ -397,7 +397,7 @@ class PeriodicOrbit:
 
     @property
     def amplitude(self) -> float:
-        """max_t |x(t) - mean x| in scaled units (x / state_scale)."""
+        """``max_t |x(t) - mean x|`` in scaled units (x / state_scale)."""
         d = (self.samples - self.samples.mean(axis=0)) / np.asarray(self.system.state_scale)
         return float(np.sqrt((d * d).sum(axis=1)).max())
 

@@ -1,0 +1,119 @@
+"""Sphinx configuration of the documentation site (``bash run.sh docs`` -> docs/_build/html).
+
+The command-line page and the API reference are generated here from the argparse definitions and the
+public modules' ``__all__`` at every build, so they cannot drift from the code. Tutorials (docs/tutorials/)
+are MyST notebooks executed during the build (cached in docs/_build/.jupyter_cache).
+"""
+
+from __future__ import annotations
+
+import importlib
+from pathlib import Path
+
+import tippedisk_analysis
+
+HERE = Path(__file__).resolve().parent
+GENERATED = HERE / "_generated"
+
+project = "tippedisk_analysis"
+author = "the tippedisk_analysis developers"
+release = version = tippedisk_analysis.__version__
+extensions = ["myst_nb", "sphinx.ext.autodoc", "sphinx.ext.napoleon", "sphinx.ext.mathjax"]
+exclude_patterns = ["_build", "*.py", "**/.ipynb_checkpoints"]
+myst_heading_anchors = 3
+nb_execution_mode = "cache"
+nb_execution_cache_path = str(HERE / "_build" / ".jupyter_cache")
+nb_execution_timeout = 300
+nb_execution_raise_on_error = True
+autodoc_member_order = "bysource"
+autodoc_typehints = "none"
+napoleon_numpy_docstring = True
+html_theme = "alabaster"
+html_title = f"tippedisk_analysis {release}"
+suppress_warnings = ["myst.header"]  # pages written for GitHub start at level-2 headings in places
+
+# the public modules of the API reference: (module, title); a module's public names are its __all__
+API_MODULES = (
+    ("tippedisk_analysis", "Top level: parameters, simulation, datasets"),
+    ("tippedisk_analysis.dynamics", "The generic dynamics layer"),
+    ("tippedisk_analysis.analysis.stationary", "Stationary spins"),
+    ("tippedisk_analysis.analysis.stability", "Stability of the spins"),
+    ("tippedisk_analysis.analysis.maps", "Stability maps and critical spin speeds"),
+    ("tippedisk_analysis.analysis.spin_continuation", "Continuation of the spins"),
+    ("tippedisk_analysis.analysis.reduced", "The symmetry-reduced tippedisk"),
+    ("tippedisk_analysis.analysis.orbits", "Periodic orbits of the tippedisk"),
+    ("tippedisk_analysis.analysis.lyapunov", "Lyapunov exponents of the tippedisk"),
+    ("tippedisk_analysis.analysis.poincare", "Poincaré sections"),
+    ("tippedisk_analysis.analysis.outcome_map", "Outcome maps"),
+    ("tippedisk_analysis.analysis.basins", "Basins and basin fractions"),
+    ("tippedisk_analysis.analysis.bifurcation", "Bifurcation diagrams"),
+    ("tippedisk_analysis.analysis.rolling", "The rolling disk"),
+    ("tippedisk_analysis.plotting", "Figures and animations"),
+    ("tippedisk_analysis.solvers.moreau", "Moreau time stepping"),
+)
+
+
+def _cli_page() -> str:
+    from tippedisk_analysis.cli import build_parser
+    from tippedisk_analysis.cli.registry import COMMANDS
+
+    parser = build_parser()
+    sub = next(a for a in parser._actions if a.__class__.__name__ == "_SubParsersAction")
+    lines = ["# Command line", "", "Generated from the argparse definitions of `tippedisk` at build time.", "",
+             "```text", parser.format_help().rstrip(), "```", ""]
+    for name in COMMANDS:
+        lines += [f"## tippedisk {name}", "", "```text", sub.choices[name].format_help().rstrip(), "```", ""]
+    return "\n".join(lines)
+
+
+def _api_page() -> str:
+    lines = ["# API reference", "",
+             "Every function and class that a public module lists in `__all__`, with its docstring. Modules "
+             "not listed here (the analysis modules' helpers, models, the CLI) are internal.", ""]
+    for module_name, title in API_MODULES:
+        module = importlib.import_module(module_name)
+        lines += [f"## {title}", "", f"`{module_name}`", ""]
+        for name in module.__all__:
+            obj = getattr(module, name)
+            if name.startswith("__") or not (callable(obj)):
+                continue
+            kind = "autoclass" if isinstance(obj, type) else "autofunction"
+            target = f"{obj.__module__}.{obj.__qualname__}"
+            options = "   :members:\n" if kind == "autoclass" and not issubclass(obj, Exception) else ""
+            lines += ["```{eval-rst}", f".. {kind}:: {target}", options.rstrip("\n") if options else "", "```",
+                      ""]
+    return "\n".join(line for line in lines)
+
+
+def _schema_page() -> str:
+    """Every dataset kind with the variables of one stored example (data/), their dims, units and names."""
+    from tippedisk_analysis import results
+
+    examples: dict[str, tuple[str, object]] = {}
+    for path in sorted((HERE.parent / "data").rglob("*.nc")):
+        ds = results.load(path)
+        examples.setdefault(ds.attrs["kind"], (str(path.relative_to(HERE.parent)), ds))
+    lines = ["# Dataset kinds and their variables", "",
+             "Generated at build time from one stored example of each kind in `data/` (conventions: "
+             "[the dataset schema](../datasets.md)). A run of other settings can add or omit variables "
+             "(a model's own outputs, a system's states).", ""]
+    for kind, (path, ds) in sorted(examples.items()):
+        lines += [f"## {kind}", "", f"Example: `{path}`; dims {', '.join(f'{k} ({v})' for k, v in ds.sizes.items())}.",
+                  "", "| variable | dims | units | long_name |", "|---|---|---|---|"]
+        for name, var in ds.data_vars.items():
+            long = str(var.attrs.get("long_name", "")).replace("|", "\\|")
+            lines.append(f"| `{name}` | {', '.join(var.dims) or 'scalar'} | {var.attrs.get('units', '')} | {long} |")
+        lines.append("")
+    return "\n".join(lines)
+
+
+def _generate(_app=None, _config=None) -> None:
+    GENERATED.mkdir(exist_ok=True)
+    for name, text in (("cli.md", _cli_page()), ("api.md", _api_page()), ("schema.md", _schema_page())):
+        path = GENERATED / name
+        if not path.exists() or path.read_text() != text:
+            path.write_text(text)
+
+
+def setup(app):
+    app.connect("config-inited", _generate)
