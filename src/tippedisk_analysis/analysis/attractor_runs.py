@@ -13,6 +13,7 @@ from ..defaults import MAP_TOL
 from ..dynamics import attractors as at
 from ..dynamics.datasets import label_coordinates, mixed_units
 from ..models import ode
+from ..models.variables import FINAL_STATE_VARIABLES
 from . import stationary as st
 from .attractor_problem import (DEFAULT_RECURRENCE, EXTRA_NAMES, KINDS, MODEL, PROJECTION, PROJECTION_UNITS,
                                 TippediskProblem, default_grid, evaluate_observables, integrator, observables)
@@ -46,12 +47,7 @@ POINT_VARIABLES = {
     "valid": (np.int8, "1", "1: lambda_N > 0 until t_final, 0: it would lift off (the run ended there)"),
     "attractor_distance": (float, "1", "equilibria: distance (grid cells, max-norm) of the final state from the "
                                        "family member at its alpha_dot in the attractor's Omega interval (fill -1)"),
-    "E_tot_final": (float, "J", "total energy at t_final"),
-    "E_kin_final": (float, "J", "kinetic energy at t_final"),
-    "beta_final": (float, "rad", "Euler angle beta at t_final"),
-    "gamma_final": (float, "rad", "Euler angle gamma at t_final (unwrapped)"),
-    "alpha_dot_final": (float, "rad s-1", "alpha_dot at t_final"),
-    "z_S_final": (float, "m", "height of S at t_final"),
+    **FINAL_STATE_VARIABLES,
 }
 
 

@@ -16,6 +16,7 @@ import numpy as np
 
 from ..compilation import compiling
 from ..models import ode
+from ..models.variables import FINAL_STATE_VARIABLES
 from ..parameters import InitialState, Setup
 from .outcome_config import FILL_TIME, OUTCOMES, MapConfig, prepare
 
@@ -85,12 +86,7 @@ RESULT_VARIABLES = {
     "gamma_turns": (float, "1", "(gamma(t_final) - gamma(window start)) / (2 pi)"),
     "sin_gamma_mean": (float, "1", "time mean of sin(gamma) over the classification window"),
     "z_S_mean": (float, "m", "time mean of z_S over the classification window"),
-    "E_tot_final": (float, "J", "total energy at t_final"),
-    "E_kin_final": (float, "J", "kinetic energy at t_final"),
-    "beta_final": (float, "rad", "Euler angle beta at t_final"),
-    "gamma_final": (float, "rad", "Euler angle gamma at t_final (unwrapped)"),
-    "alpha_dot_final": (float, "rad s-1", "alpha_dot at t_final"),
-    "z_S_final": (float, "m", "height of S at t_final"),
+    **FINAL_STATE_VARIABLES,
 }
 
 BYTES_PER_POINT = sum(np.dtype(dtype).itemsize for dtype, _, _ in RESULT_VARIABLES.values())

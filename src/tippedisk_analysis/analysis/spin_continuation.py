@@ -27,12 +27,12 @@ import numpy as np
 import xarray as xr
 
 from ..defaults import SLIP_SMOOTHING
-from ..errors import DatasetError, ParameterError
+from ..errors import ParameterError
 from ..models import ode
 from ..parameters import Setup, to_dict
 from ..results import config_of, index_coordinate, make_attrs
 from ..dynamics import continuation
-from ..dynamics.datasets import SPECIAL_KINDS
+from ..dynamics.datasets import SPECIAL_KINDS, special_point
 from ..dynamics.equilibria import EquilibriumProblem, Parameter
 from . import reduced, stability
 from . import stationary as st
@@ -301,19 +301,6 @@ def _special_table(br, prob, setup) -> dict:
         "special_l1": ("special_point", table["l1"], {"long_name": "first Lyapunov coefficient (isolated Hopf "
                                                       "points only; 0 on a line of equilibria)"}),
     }
-
-
-def special_point(ds: xr.Dataset, label: str) -> tuple[int, str]:
-    """(index along ``point``, kind) of the special point ``label`` (e.g. "HOPF1") of a continuation dataset."""
-    if ds.attrs.get("kind") != "continuation":
-        raise DatasetError(f"the dataset is of kind {ds.attrs.get('kind')!r}, not a continuation; "
-                           "give a file written by tippedisk continue")
-    labels = [str(v) for v in ds["special_label"].values]
-    if label not in labels:
-        raise ParameterError(f"no special point {label!r} in the dataset; it has {', '.join(labels) or 'none'}")
-    k = labels.index(label)
-    kind = list(SPECIAL_KINDS)[list(SPECIAL_KINDS.values()).index(int(ds["special_kind"].values[k]))]
-    return int(ds["special_index"].values[k]), kind
 
 
 def _source(ds: xr.Dataset, index: int):

@@ -130,7 +130,7 @@ def special_point(ds: xr.Dataset, label: str, kinds: dict = SPECIAL_KINDS) -> tu
     """(index along ``point``, kind) of the special point ``label`` (e.g. "HOPF1") of a continuation dataset."""
     if ds.attrs.get("kind") != "continuation":
         raise DatasetError(f"the dataset is of kind {ds.attrs.get('kind')!r}, not a continuation; give a branch "
-                           "(equilibrium_branch, tippedisk continue)")
+                           "(equilibrium_branch, spin_continuation, tippedisk continue)")
     labels = [str(v) for v in ds["special_label"].values]
     if label not in labels:
         raise ParameterError(f"no special point {label!r} in the dataset; it has {', '.join(labels) or 'none'}")

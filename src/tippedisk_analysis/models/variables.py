@@ -30,3 +30,14 @@ def state_names(orientation: tuple[str, ...]) -> tuple[str, ...]:
 def quantities(model_name: str = "ode-euler") -> tuple[str, ...]:
     """Every named quantity of a model's run: its states, then the outputs that are not states."""
     return tuple(dict.fromkeys((*state_names(ORIENTATIONS[model_name]), *OUTPUT_NAMES)))
+
+FINAL_STATE_VARIABLES = {
+    # name: (dtype, units, long_name): the state at the end of each run of an outcome or attractor map
+    "E_tot_final": (float, "J", "total energy at t_final"),
+    "E_kin_final": (float, "J", "kinetic energy at t_final"),
+    "beta_final": (float, "rad", "Euler angle beta at t_final"),
+    "gamma_final": (float, "rad", "Euler angle gamma at t_final (unwrapped)"),
+    "alpha_dot_final": (float, "rad s-1", "alpha_dot at t_final"),
+    "z_S_final": (float, "m", "height of S at t_final"),
+}
+"""Per-run columns of the outcome and attractor maps: the state where the run was decided."""
