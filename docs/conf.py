@@ -75,14 +75,12 @@ def _api_page() -> str:
         lines += [f"## {title}", "", f"`{module_name}`", ""]
         for name in module.__all__:
             obj = getattr(module, name)
-            if name.startswith("__") or not (callable(obj)):
+            if name.startswith("__") or not callable(obj):
                 continue
             kind = "autoclass" if isinstance(obj, type) else "autofunction"
-            target = f"{obj.__module__}.{obj.__qualname__}"
-            options = "   :members:\n" if kind == "autoclass" and not issubclass(obj, Exception) else ""
-            lines += ["```{eval-rst}", f".. {kind}:: {target}", options.rstrip("\n") if options else "", "```",
-                      ""]
-    return "\n".join(line for line in lines)
+            members = ["   :members:"] if kind == "autoclass" and not issubclass(obj, Exception) else []
+            lines += ["```{eval-rst}", f".. {kind}:: {obj.__module__}.{obj.__qualname__}", *members, "```", ""]
+    return "\n".join(lines)
 
 
 def _schema_page() -> str:

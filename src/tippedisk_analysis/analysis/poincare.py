@@ -266,28 +266,38 @@ def poincare_section(section: str | Section = "beta_dot=0", *, direction: str = 
     data = dict(zip(m.state_names, cr.states.T))
     for name, values in zip(ode.OUTPUT_NAMES, outs):
         data.setdefault(name, values)
+    run = {"setup": setup, "initial": initial, "t_transient": t_transient, "t_end": t_end,
+           "max_crossings": max_crossings, "tol": tol, "fall_angle": fall_angle, "slip_smoothing": slip_smoothing}
+    ds = _section_dataset(sec, model_name, m.paper_name, cr.times, data, cr.status, cr.message, run,
+                          t_final=cr.t_final, n_steps=cr.n_steps, valid=int(cr.lift_off_time is None),
+                          lift_off_time=cr.lift_off_time)
+    return describe(ds)
+
+
+def _section_dataset(sec: Section, model_name: str, paper_model: str, times, data: dict, status: str,
+                     message: str, run: dict, **attrs) -> xr.Dataset:
+    """The dataset of kind ``poincare`` (dim ``crossing``) from the crossings' times and variables; ``run``:
+    setup, initial, t_transient, t_end, max_crossings, tol, fall_angle, slip_smoothing (the configuration)."""
+    data = {k: np.asarray(v, dtype=float) for k, v in data.items()}
     data["E_tot"] = data["E_kin"] + data["E_pot"]
     config = {
-        "model": model_name, "setup": to_dict(setup), "initial": to_dict(initial),
+        "model": model_name, "setup": to_dict(run["setup"]), "initial": to_dict(run["initial"]),
         "section": {"quantity": sec.quantity, "level": sec.level, "modulo": int(sec.modulo),
                     "direction": sec.direction},
-        "t_transient": t_transient, "t_end": t_end, "max_crossings": max_crossings,
-        "integrator": {"name": "heyoka.taylor_adaptive", "tol": tol, "fall_angle": fall_angle,
-                       "slip_smoothing": slip_smoothing},
+        "t_transient": run["t_transient"], "t_end": run["t_end"], "max_crossings": run["max_crossings"],
+        "integrator": {"name": "heyoka.taylor_adaptive", "tol": run["tol"], "fall_angle": run["fall_angle"],
+                       "slip_smoothing": run["slip_smoothing"]},
     }
-    n = len(cr.times)
+    n = len(times)
     ds = xr.Dataset(
-        {"time": ("crossing", cr.times.astype(float)),
-         **{k: ("crossing", np.asarray(v, dtype=float)) for k, v in data.items()}},
+        {"time": ("crossing", np.asarray(times, dtype=float)), **{k: ("crossing", v) for k, v in data.items()}},
         coords={"crossing": index_coordinate("crossing", n, "crossing index")},
-        attrs=make_attrs("poincare", config, cr.status, cr.message, model=model_name, paper_model=m.paper_name,
-                         section=sec.label, direction=sec.direction, n_crossings=n, t_final=cr.t_final,
-                         n_steps=cr.n_steps, valid=int(cr.lift_off_time is None),
-                         lift_off_time=cr.lift_off_time),
+        attrs=make_attrs("poincare", config, status, message, model=model_name, paper_model=paper_model,
+                         section=sec.label, direction=sec.direction, n_crossings=n, **attrs),
     )
     ds["n_crossings"] = ((), np.int64(n), {"units": "1", "long_name": "number of crossings stored"})
     ds["crossing"].attrs.update(units="1", long_name="crossing index (after the transient)")
-    return describe(ds)
+    return ds
 
 
 def _hybrid_section(sec: Section, setup: Setup, initial: InitialState, t_transient: float, t_end: float,
@@ -301,26 +311,16 @@ def _hybrid_section(sec: Section, setup: Setup, initial: InitialState, t_transie
                                   direction=sec.direction, t_transient=t_transient, t_end=t_end, tol=tol,
                                   fall_angle=fall_angle, slip_smoothing=slip_smoothing)
     n = len(cr["time"]) if max_crossings is None else min(max_crossings, len(cr["time"]))
-    data = {name: np.asarray(v[:n], dtype=float) for name, v in cr["data"].items()}
-    data["E_tot"] = data["E_kin"] + data["E_pot"]
-    config = {"model": "hybrid-euler", "setup": to_dict(setup), "initial": to_dict(initial),
-              "section": {"quantity": sec.quantity, "level": sec.level, "modulo": int(sec.modulo),
-                          "direction": sec.direction},
-              "t_transient": t_transient, "t_end": t_end, "max_crossings": max_crossings,
-              "integrator": {"name": "heyoka.taylor_adaptive", "tol": tol, "fall_angle": fall_angle,
-                             "slip_smoothing": slip_smoothing}}
+    ds = _section_dataset(sec, "hybrid-euler", "event-driven Models 1/2", cr["time"][:n],
+                          {name: v[:n] for name, v in cr["data"].items()}, cr["status"],
+                          f"{cr['message']}; {n} crossing(s)",
+                          {"setup": setup, "initial": initial, "t_transient": t_transient, "t_end": t_end,
+                           "max_crossings": max_crossings, "tol": tol, "fall_angle": fall_angle,
+                           "slip_smoothing": slip_smoothing},
+                          t_final=cr["t_final"], n_steps=0, valid=int(cr["status"] != "lift_off"),
+                          lift_off_time=cr["t_final"] if cr["status"] == "lift_off" else None)
     flags = {"flag_values": np.array(list(hybrid.MODES.values()), np.int8), "flag_meanings": " ".join(hybrid.MODES)}
-    ds = xr.Dataset(
-        {"time": ("crossing", cr["time"][:n]), **{k: ("crossing", v) for k, v in data.items()},
-         "mode": ("crossing", cr["mode"][:n], {"units": "1", "long_name": "contact mode at the crossing", **flags})},
-        coords={"crossing": index_coordinate("crossing", n, "crossing index")},
-        attrs=make_attrs("poincare", config, cr["status"], f"{cr['message']}; {n} crossing(s)", model="hybrid-euler",
-                         paper_model="event-driven Models 1/2", section=sec.label, direction=sec.direction,
-                         n_crossings=n, t_final=cr["t_final"], n_steps=0, valid=int(cr["status"] != "lift_off"),
-                         lift_off_time=cr["t_final"] if cr["status"] == "lift_off" else None),
-    )
+    ds["mode"] = ("crossing", cr["mode"][:n], {"units": "1", "long_name": "contact mode at the crossing", **flags})
     for name, attrs in hybrid.VARIABLE_ATTRS.items():
         ds[name].attrs.update(attrs)
-    ds["n_crossings"] = ((), np.int64(n), {"units": "1", "long_name": "number of crossings stored"})
-    ds["crossing"].attrs.update(units="1", long_name="crossing index (after the transient)")
     return describe(ds)

@@ -174,29 +174,23 @@ def identify(sec: xr.Dataset, *, tol: float = 1e-5) -> Motion:
 
 def on_energy_level(state, energy: float, pars=None) -> np.ndarray:
     """``state`` with its angular velocity scaled so that E_tot = ``energy`` [J] (E_kin is quadratic in omega)."""
-    system = reduced_system()
     x = np.array(state, dtype=float)
-    obs = system.observe(x[:, None], pars)
-    e_pot = float(obs["E_tot"][0]) - _kinetic(x, pars)
+    still = x.copy()
+    still[2:] = 0.0
+    e_now, e_pot = reduced_system().observe(np.column_stack([x, still]), pars)["E_tot"]
     if energy <= e_pot:
         raise ParameterError(f"the energy {energy:.6g} J is below the potential energy {e_pot:.6g} J of the state")
-    x[2:] *= math.sqrt((energy - e_pot) / _kinetic(x, pars))
+    x[2:] *= math.sqrt((energy - e_pot) / (e_now - e_pot))
     return x
 
 
-def _kinetic(x, pars) -> float:
-    system = reduced_system()
-    still = np.array(x, dtype=float)
-    still[2:] = 0.0
-    return float(system.observe(x[:, None], pars)["E_tot"][0] - system.observe(still[:, None], pars)["E_tot"][0])
-
-
-def central_orbit(sec: xr.Dataset, *, pars=None) -> dy.PeriodicOrbit:
+def central_orbit(sec: xr.Dataset, *, pars=None, motion: Motion | None = None) -> dy.PeriodicOrbit:
     """An elliptic periodic orbit at a torus's centre: Newton from the mean of its returns, put on their energy
     level, with omega_x pinned at the mean's value. The orbits at one energy form a one-parameter family (the
     monodromy has a third multiplier 1), so this picks the member through the centre; tori started near it
-    turn at its Floquet angle (docs/rolling.md), the torus itself at its own rotation number."""
-    motion = identify(sec)
+    turn at its Floquet angle (docs/rolling.md), the torus itself at its own rotation number. ``motion``: what
+    :func:`identify` said of ``sec``, if known."""
+    motion = motion or identify(sec)
     if motion.kind == "unresolved":
         raise ParameterError(f"no centre to start from: {motion.message}")
     energy = float(np.mean(sec["E_tot"].values))
@@ -216,11 +210,9 @@ def floquet_angle(orbit: dy.PeriodicOrbit) -> float:
 MARGIN_STEP = 1e-3  # [s] sampling of a motion for its smallest cone margin (error ~ 1e-4 N: margin'' ~ 1e3 N/s^2)
 
 
-def motion_consistency(state, duration: float, pars=None) -> dict:
-    """The smallest cone margin and normal force [N] along the rolling motion from ``state`` over ``duration``
-    [s] (samples every MARGIN_STEP), with the time [s] and the reduced state where the margin is smallest."""
-    system = reduced_system()
-    times = np.arange(0.0, duration, MARGIN_STEP)
+def _smallest_margin(system: System, state, times: np.ndarray, pars) -> dict:
+    """The smallest cone margin and normal force [N] on ``times`` along the motion from ``state``, with the time
+    [s] and the state where the margin is smallest."""
     X = dy.Flow(system).trajectory(np.asarray(state, dtype=float), times, system.with_pars(pars))
     obs = system.observe(X.T, pars)
     k = int(np.argmin(obs["cone_margin"]))
@@ -228,17 +220,17 @@ def motion_consistency(state, duration: float, pars=None) -> dict:
             "time": float(times[k]), "state": X[k]}
 
 
+def motion_consistency(state, duration: float, pars=None) -> dict:
+    """:func:`consistency` along the rolling motion from ``state`` over ``duration`` [s] (samples every
+    MARGIN_STEP)."""
+    return _smallest_margin(reduced_system(), state, np.arange(0.0, duration, MARGIN_STEP), pars)
+
+
 def consistency(orbit: dy.PeriodicOrbit, n_samples: int = 2000) -> dict:
     """The smallest cone margin ``mu lambda_N - |lambda_T|`` [N] and normal force lambda_N [N] along ``orbit``
-    (``n_samples`` points over the period) and the state where the margin is smallest."""
-    system = orbit.system
-    flow = dy.Flow(system)
+    (``n_samples`` points over the period) and the time and state where the margin is smallest."""
     times = np.linspace(0.0, orbit.period, n_samples, endpoint=False)
-    X = flow.trajectory(orbit.states[0], times, orbit.pars)
-    obs = system.observe(X.T, orbit.pars)
-    k = int(np.argmin(obs["cone_margin"]))
-    return {"min_cone_margin": float(obs["cone_margin"][k]), "min_lambda_N": float(np.min(obs["lambda_N"])),
-            "time": float(times[k]), "state": X[k]}
+    return _smallest_margin(orbit.system, orbit.states[0], times, orbit.pars)
 
 
 # ---------------------------------------------------------------------------- from a run of Models 1/2
@@ -288,7 +280,7 @@ def orbits_from_run(run: xr.Dataset, *, returns_time: float = RETURNS_TIME) -> x
         raise ParameterError(f"the rolling motion from the run's end does not go on: {sec.attrs['message']}")
     if motion.kind == "unresolved":
         raise ParameterError(f"{motion.message}")
-    orbit = (central_orbit(sec, pars=pars) if motion.kind == "torus" else
+    orbit = (central_orbit(sec, pars=pars, motion=motion) if motion.kind == "torus" else
              dy.find_orbit(reduced_system(), motion.centre, motion.mean_return, pars, pinned=("omega_x",)))
     c = consistency(orbit) if orbit.converged else {}
     along = motion_consistency(x, returns_time, pars)

@@ -66,7 +66,6 @@ class Compiled:
     sliding: object
     rolling_outputs: object  # cfuncs: rolling.OUTPUT_NAMES; ode.OUTPUT_NAMES + (x_dot, y_dot)
     sliding_outputs: object
-    section: tuple | None = None  # (quantity, modulo, direction): a Poincaré section recorded in both modes
 
 
 SLIDING_OUTPUTS = (*ode.OUTPUT_NAMES, "x_dot", "y_dot")
@@ -109,7 +108,7 @@ def compiled(tol: float, section: tuple | None = None) -> Compiled:
         slide = hy.taylor_adaptive(ssys, np.zeros(N_SLIDE), pars=pars, tol=tol, compact_mode=False, t_events=[
             hy.t_event(sfall, direction=neg), hy.t_event(sout[ode.OUTPUT_NAMES.index("lambda_N")], direction=neg),
             hy.t_event(sv[sliding.STATE_NAMES.index("slip_speed")], direction=neg)], nt_events=nt["sliding"])
-        return Compiled(roll, slide, hy.cfunc(rout, rv), hy.cfunc(sout, sv), section)
+        return Compiled(roll, slide, hy.cfunc(rout, rv), hy.cfunc(sout, sv))
 
 
 def _outputs(cfunc, states: np.ndarray, pars: np.ndarray) -> np.ndarray:
@@ -123,6 +122,22 @@ def _onset_angle(cm: Compiled, x_roll: np.ndarray, pars: np.ndarray) -> tuple[fl
     return o["cone_margin"], math.atan2(-o["lambda_Ty"], -o["lambda_Tx"])
 
 
+@dataclass(frozen=True)
+class SectionEvent:
+    """A Poincaré section recorded by both modes' integrators: quantity (mod 2 pi if modulo) = level, crossed
+    in direction, after t_transient [s]."""
+
+    quantity: str
+    level: float
+    modulo: bool = False
+    direction: str = "positive"
+    t_transient: float = 0.0
+
+    @property
+    def compiled_key(self) -> tuple:
+        return (self.quantity, self.modulo, self.direction)  # the level is a runtime parameter
+
+
 @dataclass
 class Segment:
     mode: str
@@ -132,22 +147,22 @@ class Segment:
 
 
 def integrate(setup: Setup, initial: InitialState, t_end: float, dt_output: float, tol: float, fall_angle: float,
-              slip_smoothing: float, max_switches: int = MAX_SWITCHES, section=None):
+              slip_smoothing: float, max_switches: int = MAX_SWITCHES, section: SectionEvent | None = None):
     """The run on the output grid: (segments, switches [(time, new mode)], status, message, t_final,
-    {mode: integrator}); with ``section`` = (quantity, modulo, direction, level, t_transient) the integrators'
-    recorders hold the section's crossings."""
-    cm = compiled(tol, None if section is None else tuple(section[:3]))
+    {mode: integrator}); with a ``section`` the integrators' recorders hold its crossings."""
+    cm = compiled(tol, None if section is None else section.compiled_key)
     pars = ode.parameter_vector(setup, fall_angle, slip_smoothing)
     roll, slide = copy.copy(cm.rolling), copy.copy(cm.sliding)
     for ta in (roll, slide):
         if section is None:
             ta.pars[:] = pars
         else:
-            ta.pars[:] = np.append(pars, section[3])
+            ta.pars[:] = np.append(pars, section.level)
             rec = ta.nt_events[0].callback
-            rec.t_transient, rec.level, rec.modulo, rec.times, rec.states = section[4], section[3], section[1], [], []
-            if section[1]:
-                rec.q_index = rolling.STATE_NAMES.index(section[0])  # modulo: an angle, the same index in both modes
+            rec.t_transient, rec.level, rec.modulo = section.t_transient, section.level, section.modulo
+            rec.times, rec.states = [], []
+            if section.modulo:  # an angle: the same index in both modes
+                rec.q_index = rolling.STATE_NAMES.index(section.quantity)
     grid = output_grid(t_end, dt_output)
     x = rolling.initial_state_vector(initial)
     margin, phi = _onset_angle(cm, x, pars)
@@ -272,10 +287,10 @@ def section_crossings(setup: Setup, initial: InitialState, quantity: str, level:
     "switches"}."""
     if modulo and quantity not in rolling.STATE_NAMES[2:5]:
         raise ParameterError(f"a 'mod 2pi' section needs an angle (alpha, beta, gamma), not {quantity!r}")
-    section = (quantity, bool(modulo), direction, float(level), float(t_transient))
+    section = SectionEvent(quantity, float(level), bool(modulo), direction, float(t_transient))
     _seg, switches, status, message, t_final, integrators = integrate(
         setup, initial, t_end, t_end, tol, fall_angle, slip_smoothing, max_switches, section=section)
-    cm = compiled(tol, section[:3])
+    cm = compiled(tol, section.compiled_key)
     pars = ode.parameter_vector(setup, fall_angle, slip_smoothing)
     parts = []
     for mode, ta in integrators.items():
