@@ -186,7 +186,7 @@ class TippediskProblem(at.Problem):
                  "stationary_deviation": math.nan, "energy_drift": drift}
         if abs(turns) >= 1.0:  # rolls on its rim
             grid = self.grid
-            centroid = at._circular_mean(grid, cand.observed)
+            centroid = at.circular_mean(grid, cand.observed)
             half = len(t) // 2
             spread = 0.5 * np.ptp(grid.unwrap(cand.observed[:, half:]), axis=1) * grid.widths
             period = 2 * math.pi * span / abs(g[-1] - g[0])  # time per turn of gamma
@@ -210,7 +210,7 @@ class TippediskProblem(at.Problem):
         # a dissipating oscillation about the spin family, or near a spin that Newton + stability do not
         # accept (an unstable member, slowly approached or left): a transient
         extra["branch"] = float(np.sign(np.mean(np.sin(_wrap(g)))))
-        return at.Description("wobbling", self.represent(cand.states[:, -1]), at._circular_mean(grid, cand.observed),
+        return at.Description("wobbling", self.represent(cand.states[:, -1]), at.circular_mean(grid, cand.observed),
                               0.5 * np.ptp(grid.unwrap(cand.observed[:, half:]), axis=1) * grid.widths,
                               0.5 * float(np.ptp(g[half:])), -1.0, extra, transient=True)
 

@@ -240,7 +240,7 @@ def branch_dataset(br: continuation.Branch, prob: EquilibriumProblem, setup: Set
     what = ("curve of " + {"hopf": "Hopf", "zero": "zero-eigenvalue"}[prob.critical] + " points") \
         if prob.critical else f"{info.get('branch', '')} branch"
     message = f"{what}: {len(u)} points; {br.message}" + (f"; {labels}" if labels else "")
-    ds.attrs = make_attrs("continuation", config, "completed" if br.status == "completed" else "partial", message,
+    ds.attrs = make_attrs("continuation", config, br.status, message,
                           title="Continuation of the stationary spinning solutions of the tippedisk",
                           model="ode-euler", paper_model="ODE Model 1 (reduced by the rotational symmetry)",
                           parameters=" ".join(p.name for p in prob.free), critical=prob.critical or "equilibria",

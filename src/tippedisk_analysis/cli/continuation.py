@@ -107,4 +107,4 @@ def continue_(args) -> int:
                                                                             **options))
     results.save(ds, output)
     print(f"{show(output)}: {ds.attrs['message']}")
-    return 0 if ds.attrs["status"] == "completed" else 1
+    return 0 if ds.attrs["status"] in continuation.RESULTS else 1

@@ -102,7 +102,9 @@ def periodic_orbits(args) -> int:
     print(f"{show(output)}: {ds.attrs['message']}")
     if ds.attrs["status"] == "no_orbit":
         return EXIT_NO_ORBIT
-    return 0 if ds.attrs["status"] == "completed" else 1
+    from ..dynamics.continuation import RESULTS
+
+    return 0 if ds.attrs["status"] in RESULTS else 1
 
 
 def _frictionless(args):

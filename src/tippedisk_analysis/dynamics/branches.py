@@ -33,7 +33,7 @@ def _options(options: Options | None, overrides: dict) -> Options:
     return options or Options(**overrides)
 
 
-def _pair(bounds, name: str) -> tuple[float, float]:
+def bounds_pair(bounds, name: str) -> tuple[float, float]:
     try:
         low, high = (float(b) for b in bounds)
     except (TypeError, ValueError):
@@ -53,7 +53,7 @@ def equilibrium_branch(system: System, state, parameter: str, *, bounds, pars=No
     Options: :class:`.continuation.Options` or its fields as keywords (ds, ds_max, max_points, ...)."""
     pars = system.with_pars(pars)
     index = system.parameter_index(parameter)
-    low, high = _pair(bounds, parameter)
+    low, high = bounds_pair(bounds, parameter)
     if not low <= pars[index] <= high:
         raise ParameterError(f"the start {parameter} = {pars[index]:g} lies outside the bounds [{low:g}, {high:g}]")
     state = np.asarray(state, dtype=float)
@@ -83,7 +83,7 @@ def special_point_curve(system: System, branch: xr.Dataset, label: str, paramete
     for name in bounds:
         if name not in parameters:
             raise ParameterError(f"bound on {name!r}, which is not one of the curve's parameters {parameters}")
-    box = {parameters.index(name): _pair(b, name) for name, b in bounds.items()}
+    box = {parameters.index(name): bounds_pair(b, name) for name, b in bounds.items()}
     free = [Parameter.of(system, name, (scales or {}).get(name, 1.0)) for name in parameters]
     prob = EquilibriumProblem(system, free, pars=pars, bounds=box, critical="hopf" if kind == "hopf" else "zero")
     u0 = np.append(state, [pars[system.parameter_index(name)] for name in parameters])

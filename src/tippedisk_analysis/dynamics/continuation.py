@@ -12,7 +12,11 @@ Algorithm (as in AUTO / BifurcationKit): scaled unknowns v = u / scale; tangent 
 of F_u diag(scale) (smallest right singular vector), oriented along the previous one; predictor
 v_k + ds t_k; corrector: Gauss-Newton on [F(v); t_k . (v - v_k) - ds]; adaptive ds (grow after
 an easy correction, halve after a failure, stop below ds_min with a status); stop at parameter
-bounds (located exactly), after max_points, or on a singular corrector.
+bounds (located exactly), after max_points, or on a singular corrector. A branch says how it ended
+(:attr:`Branch.status`): ``completed`` only at a bound or a terminal special point; ``max_points`` when the
+point budget ran out; ``stalled`` when STALL_POINTS consecutive points moved the first free parameter by
+less than STALL_TOL (relative): the branch is vertical there (a degenerate point, a family at one parameter
+value) or creeps; ``corrector_failed``.
 
 Special points (test functions on the eigenvalues s_i of the state Jacobian):
 
@@ -44,6 +48,11 @@ from .detection import LABELS, hopf_test, label_points, nearest_pair, nearest_re
 START_TOL = 1e-6  # a start point's residual, relative to the size of its terms (it is corrected first)
 EASY_ITERATIONS = 3  # the step grows after a correction in at most this many Newton iterations
 ZERO_RATIO = 1e-3  # a located test function is this much smaller than at the ends (a pole or a jump is not)
+STALL_POINTS, STALL_TOL = 30, 1e-10  # a branch whose last 30 points moved p by < 1e-10 (1 + |p|) has stalled
+FOLD_NOISE = 1e-9  # a sign change of the tangent's parameter component below this on both sides is no fold
+STATUSES = ("completed", "max_points", "stalled", "corrector_failed")
+RESULTS = frozenset({"completed", "max_points", "degenerate"})  # branch statuses that are results, not failures
+# (``degenerate``: an orbit branch from a degenerate Hopf point, :mod:`.orbit_branches`)
 
 
 @dataclass(frozen=True)
@@ -167,9 +176,10 @@ class SpecialPoint:
 class Branch:
     points: list
     special_points: list
-    status: str  # "completed" (bound or max_points), "corrector_failed", "singular"
+    status: str  # one of STATUSES
     message: str
     options: Options
+    unlocated: list = field(default_factory=list)  # test-function sign changes that were no zero, where
 
     def array(self, attribute: str) -> np.ndarray:
         return np.array([getattr(p, attribute) for p in self.points])
@@ -284,9 +294,15 @@ def continue_branch(problem: Problem, u0: np.ndarray, options: Options = Options
     special: list[SpecialPoint] = []
     dropped: list[str] = []  # test-function sign changes that were not zeros
     ds, status, message = abs(options.ds), "completed", ""
+    first = problem.parameters[0]
     while True:
         if len(points) >= options.max_points:
-            message = f"stopped after max_points = {options.max_points} points"
+            status, message = "max_points", (f"ran out of points (max_points = {options.max_points}) at "
+                                             f"{_where(problem, points[-1].u)}; raise max_points or ds_max")
+            break
+        if len(points) >= STALL_POINTS and _span(points, first) <= STALL_TOL * (1 + abs(points[-1].u[first])):
+            status, message = "stalled", (f"stalled: {STALL_POINTS} points within {_span(points, first):.2g} of "
+                                          f"{_where(problem, points[-1].u)} (a vertical branch or a creeping step)")
             break
         last = points[-1]
         u_new, iterations = _step(problem, last, ds, options)
@@ -331,10 +347,14 @@ def continue_branch(problem: Problem, u0: np.ndarray, options: Options = Options
         if iterations <= EASY_ITERATIONS:
             ds = min(options.ds_max, ds * options.growth)
     if dropped:
-        message += (f"; {len(dropped)} sign change(s) of a test function not located as a zero (a pole, a "
-                    f"discontinuity or a corrector failure): {', '.join(dropped)}")
+        message += f"; {len(dropped)} sign change(s) of a test function not located as a zero (attribute unlocated)"
     label_points(special)
-    return Branch(points, special, status, message, options)
+    return Branch(points, special, status, message, options, dropped)
+
+
+def _span(points: list, index: int) -> float:
+    """How far the last STALL_POINTS points moved unknown ``index`` (stalled: below STALL_TOL (1 + |value|))."""
+    return float(np.ptp([p.u[index] for p in points[-STALL_POINTS:]]))
 
 
 def _where(problem: Problem, u: np.ndarray) -> str:
@@ -396,6 +416,8 @@ def _detect_and_locate(problem, last: Point, new: Point, special: list, points: 
     changes that are not zeros (poles, jumps) or could not be located are named in ``dropped``."""
     before, after = problem.tests(last), problem.tests(new)
     changed = [kind for kind in before if kind in after and before[kind] * after[kind] < 0]
+    if "fold" in changed and max(abs(before["fold"]), abs(after["fold"])) < FOLD_NOISE:
+        changed.remove("fold")  # the tangent is vertical: its parameter component changes sign by round-off
     if "fold" in changed and "branch_point" in changed:
         changed.remove("branch_point")  # a real eigenvalue through 0 with the tangent turning: a fold
     located = []
@@ -472,5 +494,6 @@ def continue_both_ways(problem: Problem, u0: np.ndarray, options: Options = Opti
     special += [SpecialPoint(sp.kind, n_back - 1 + sp.index, sp.u, sp.eigenvalues, sp.value, sp.data)
                 for sp in forward.special_points]
     label_points(special)
-    status = "completed" if backward.status == forward.status == "completed" else "corrector_failed"
-    return Branch(points, special, status, f"one end: {backward.message}; other end: {forward.message}", options)
+    status = next((b.status for b in (backward, forward) if b.status != "completed"), "completed")
+    return Branch(points, special, status, f"one end: {backward.message}; other end: {forward.message}", options,
+                  backward.unlocated + forward.unlocated)

@@ -69,6 +69,10 @@ def special_table(br: Branch, system: System, kinds: dict = SPECIAL_KINDS) -> di
                                "units": system.per_time("rad")}),
         "special_l1": ("special_point", np.array([float(sp.data.get("l1", 0.0)) for sp in sps]),
                        {"long_name": "first Lyapunov coefficient of Hopf points (< 0 supercritical, > 0 subcritical)"}),
+        "special_degenerate": ("special_point", np.array([sp.data.get("class") == "degenerate" for sp in sps],
+                                                         dtype=np.int8),
+                               flag_attrs("l1 zero to round-off of its terms (a degenerate Hopf point)",
+                                          {"no": 0, "yes": 1})),
     }
 
 
@@ -110,20 +114,32 @@ def continuation_dataset(br: Branch, prob, info: dict | None = None) -> xr.Datas
         "eig": index_coordinate("eig", ev.shape[1], "eigenvalue index"),
         "special_point": index_coordinate("special_point", len(br.special_points), "special point index")})
     free = [p.name for p in prob.free]
-    labels = ", ".join(f"{sp.label} at " + ", ".join(f"{name} = {sp.u[n + j]:.8g}" for j, name in enumerate(free))
-                       for sp in br.special_points)
+    labels = summary([f"{sp.label} at " + ", ".join(f"{name} = {sp.u[n + j]:.8g}" for j, name in enumerate(free))
+                      + (" (degenerate: l1 = 0)" if sp.data.get("class") == "degenerate" else "")
+                      for sp in br.special_points])
     what = (f"curve of {'Hopf' if prob.critical == 'hopf' else 'zero-eigenvalue'} points" if prob.critical
             else "branch of equilibria")
     config = {"system": system.name, "system_key": system.key, **(info or {}), "free": free,
               "critical": prob.critical or "", "pars": list(map(float, prob.pars)),
               "bounds": {free[i - n]: list(b) for i, b in prob.bounds.items()},
               "options": dataclasses.asdict(br.options)}
-    ds.attrs = make_attrs("continuation", config, "completed" if br.status == "completed" else "partial",
+    ds.attrs = make_attrs("continuation", config, br.status,
                           f"{system.name}: {what}, {len(u)} points; {br.message}" + (f"; {labels}" if labels else ""),
                           **system.attrs(prob.pars), parameters=" ".join(free),
                           critical=prob.critical or "equilibria",
-                          labels=" ".join(sp.label for sp in br.special_points))
+                          labels=" ".join(sp.label for sp in br.special_points), **unlocated_attrs(br))
     return ds
+
+
+def summary(items: list[str], limit: int = 6) -> str:
+    """``items`` joined for a one-line message: the first ``limit`` and how many more."""
+    more = f" and {len(items) - limit} more" if len(items) > limit else ""
+    return ", ".join(items[:limit]) + more
+
+
+def unlocated_attrs(br) -> dict:
+    """The attribute ``unlocated`` (where test functions changed sign without a zero), if there are any."""
+    return {"unlocated": "; ".join(br.unlocated)} if br.unlocated else {}
 
 
 def special_point(ds: xr.Dataset, label: str, kinds: dict = SPECIAL_KINDS) -> tuple[int, str]:

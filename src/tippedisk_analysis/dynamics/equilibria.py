@@ -298,8 +298,8 @@ class EquilibriumProblem(continuation.Problem):
                 return {"frequency": nf["frequency"], "a": nf["a"], "b": nf["b"], "k": nf["k"], "class": nf["class"]}
             C = self.field.tensor(x, pars, 3, with_parameters=False)[:n]
             nf = normal_forms.first_lyapunov_coefficient(J, B, C)
-            return {"frequency": nf["frequency"], "l1": nf["l1"],
-                    "class": "supercritical" if nf["l1"] < 0 else "subcritical" if nf["l1"] > 0 else "degenerate"}
+            return {"frequency": nf["frequency"], "l1": nf["l1"], "l1_scale": nf["scale"],
+                    "class": "degenerate" if nf["degenerate"] else "supercritical" if nf["l1"] < 0 else "subcritical"}
         if kind in ("branch_point", "fold", "fold_or_bp") and phi0 is not None:
             nf = normal_forms.line_transcritical(J, B, phi0, N)
             return {"a": nf["a"], "b": nf["b"], "c": nf["c"], "k": nf["k"], "class": nf["class"],

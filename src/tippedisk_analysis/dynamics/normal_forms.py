@@ -77,16 +77,22 @@ def fold_coefficient(J: np.ndarray, B: np.ndarray) -> dict:
     return {"a": float(0.5 * p @ bilinear(B, q, q)), "q": q, "p": p}
 
 
+L1_DEGENERATE = 1e-9  # |l1| below this share of the size of its terms: zero to round-off (a degenerate Hopf point)
+
+
 def first_lyapunov_coefficient(J: np.ndarray, B: np.ndarray, C: np.ndarray) -> dict:
-    """Hopf point of an isolated equilibrium: frequency omega and l1 (Kuznetsov (3.20), n-dim form)."""
+    """Hopf point of an isolated equilibrium: frequency omega and l1 (Kuznetsov (3.20), n-dim form); ``scale``:
+    the size of its terms, (sum of their moduli) / (2 omega); ``degenerate``: |l1| <= L1_DEGENERATE scale (l1
+    vanishes to round-off: a generalised Hopf point, or a centre where the system is conservative)."""
     omega, q, p, lam = _critical_pair(J)
     n = J.shape[0]
     qb = np.conj(q)
     h11 = np.linalg.solve(J, bilinear(B, q, qb))  # J^-1 B(q, conj q)
     h20 = np.linalg.solve(2j * omega * np.eye(n) - J, bilinear(B, q, q))
-    g = (np.vdot(p, trilinear(C, q, q, qb)) - 2 * np.vdot(p, bilinear(B, q, h11))
-         + np.vdot(p, bilinear(B, qb, h20)))
-    return {"l1": float(g.real / (2 * omega)), "frequency": omega, "eigenvalue": lam, "q": q, "p": p}
+    terms = (np.vdot(p, trilinear(C, q, q, qb)), -2 * np.vdot(p, bilinear(B, q, h11)), np.vdot(p, bilinear(B, qb, h20)))
+    l1, scale = float(sum(terms).real / (2 * omega)), float(sum(map(abs, terms)) / (2 * omega))
+    return {"l1": l1, "scale": scale, "degenerate": abs(l1) <= L1_DEGENERATE * scale, "frequency": omega,
+            "eigenvalue": lam, "q": q, "p": p}
 
 
 def nonsmooth_hopf_coefficient(q: np.ndarray, p: np.ndarray, nonsmooth, n_theta: int = 512) -> complex:

@@ -31,7 +31,8 @@ import numpy as np
 import xarray as xr
 
 from ..errors import ParameterError
-from . import continuation
+from . import continuation, normal_forms
+from .branches import bounds_pair
 from .datasets import point_of, special_point
 from .flows import TAYLOR_TOL
 from .orbit_datasets import branch_dataset
@@ -65,11 +66,14 @@ def orbit_problem(orbit: PeriodicOrbit, parameter: str, *, parameter_scale: floa
     return prob, u0
 
 
-def continue_orbits(orbit: PeriodicOrbit, parameter: str, *, bounds: dict | None = None, direction: int = 1,
+def continue_orbits(orbit: PeriodicOrbit, parameter: str, *, bounds=None, direction: int = 1,
                     both_ways: bool = False, options: continuation.Options | None = None, **problem_options):
-    """The branch of periodic orbits through ``orbit`` in ``parameter`` by PALC, with its special points
+    """The branch of periodic orbits through ``orbit`` in ``parameter`` by PALC within ``bounds`` (a (low, high)
+    pair for ``parameter``, or {name or "T": (low, high)}), with its special points
     (fold of cycles, branch point, period doubling, Neimark-Sacker, approach to a homoclinic orbit at the
     period bound ``period_max``). Returns (Branch, ShootingProblem)."""
+    if bounds is not None and not isinstance(bounds, dict):
+        bounds = {parameter: bounds_pair(bounds, parameter)}
     prob, u0 = orbit_problem(orbit, parameter, bounds=bounds, **problem_options)
     options = options or continuation.Options(ds=0.02, ds_max=0.1, max_points=200)
     if both_ways:
@@ -229,6 +233,21 @@ def hopf_start(system: System, state, pars, parameter: str, *, segments: int = 4
                          "(the corrector failed for every first step); check that it is a Hopf point")
 
 
+def _explain_stall(system: System, state, pars, parameter: str, br: continuation.Branch) -> None:
+    """A branch from a Hopf point that stalled at its parameter value: if the point is degenerate (l1 = 0 to
+    round-off) the orbits form a vertical family there (status ``degenerate``), not a branch in the parameter."""
+    J, B, C = (system.field().tensor(state, pars, k, with_parameters=False) for k in (1, 2, 3))
+    nf = normal_forms.first_lyapunov_coefficient(J, B, C)
+    if not nf["degenerate"]:
+        return
+    value = pars[system.parameter_index(parameter)]
+    br.status = "degenerate"
+    br.message = (f"the Hopf point at {parameter} = {value:.10g} is degenerate (l1 = {nf['l1']:.2g}, its terms "
+                  f"{nf['scale']:.2g}): the orbits form a vertical family at that value (a centre, as where the "
+                  f"system is conservative) and no branch in {parameter} emanates; the {len(br.points)} orbits "
+                  "computed lie on that family")
+
+
 def orbit_branch(system: System, branch: xr.Dataset, label: str, *, bounds, segments: int = 4,
                  phase: str = "integral", period_max: float | None = None, parameter_scale: float = 1.0,
                  marks=(), options: continuation.Options | None = None, n_samples: int = N_SAMPLES,
@@ -258,7 +277,7 @@ def hopf_branch(system: System, state, pars, parameter: str, *, bounds, segments
     """The branch of periodic orbits born at the Hopf point (``state``, ``pars``) in ``parameter``, as
     :func:`orbit_branch` (which finds the point on an equilibrium branch); ``config``: more provenance."""
     pars = system.with_pars(pars)
-    low, high = (float(b) for b in bounds)
+    low, high = bounds_pair(bounds, parameter)
     if options is not None and option_keywords:
         raise ParameterError("give either options=Options(...) or the option keywords (ds, ds_max, ...), not both")
     options = options or continuation.Options(**({"ds": 0.02, "ds_max": 0.2, "max_points": 300} | option_keywords))
@@ -267,6 +286,8 @@ def hopf_branch(system: System, state, pars, parameter: str, *, bounds, segments
                                   parameter_scale=parameter_scale, options=options)
     br = continuation.continue_branch(prob, u, options, tangent=tangent, marks=marks)
     _mark_homoclinic(prob, br)
+    if br.status == "stalled":
+        _explain_stall(system, state, pars, parameter, br)
     return branch_dataset(prob, br, {"source": "hopf", **(config or {}), "hopf_state": list(map(float, state)),
                                      "hopf_value": float(pars[system.parameter_index(parameter)]),
                                      "system_key": system.key}, n_samples)

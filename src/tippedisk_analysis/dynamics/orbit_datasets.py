@@ -11,7 +11,8 @@ import xarray as xr
 from ..errors import DatasetError, ParameterError
 from ..results import config_of, index_coordinate, make_attrs
 from . import continuation
-from .datasets import check_system, flag_attrs, label_coordinates, mixed_units, state_coordinates
+from .datasets import (check_system, flag_attrs, label_coordinates, mixed_units, state_coordinates, summary,
+                       unlocated_attrs)
 from .flows import STABILITY, classify
 from .orbits import NEWTON_MAX_ITER, STATUS, find_orbit
 from .shooting import N_SAMPLES, PeriodicOrbit, ShootingProblem
@@ -32,14 +33,16 @@ def branch_dataset(prob: ShootingProblem, br: continuation.Branch, info: dict | 
     """A branch of periodic orbits as a dataset of kind ``periodic_orbits``; ``extra(orbits)``: more variables
     computed from the branch's orbits ({name: (dims, values, attrs)})."""
     orbits = branch_orbits(prob, br, n_samples)
-    status = "completed" if br.status == "completed" else "partial"
-    labels = ", ".join(f"{sp.label} at {prob.parameter} = {sp.u[prob.t_index + 1]:.10g}" for sp in br.special_points)
+    status = br.status
+    labels = summary([f"{sp.label} at {prob.parameter} = {sp.u[prob.t_index + 1]:.10g}" for sp in br.special_points])
     message = f"branch of {len(orbits)} periodic orbits; {br.message}" + (f"; {labels}" if labels else "")
     config = {"options": dataclasses.asdict(br.options), "segments": prob.m, "phase": prob.phase,
               "tol": prob.flow.tol, "bounds": {prob.names[i]: list(b) for i, b in prob.bounds.items()},
               **(info or {})}
-    return orbits_dataset(orbits, status, message, config, special=br.special_points, prob=prob,
-                          arclength=br.array("arclength"), extra=extra(orbits) if extra else None)
+    ds = orbits_dataset(orbits, status, message, config, special=br.special_points, prob=prob,
+                        arclength=br.array("arclength"), extra=extra(orbits) if extra else None)
+    ds.attrs.update(unlocated_attrs(br))
+    return ds
 
 
 def orbits_dataset(orbits: list[PeriodicOrbit], status: str, message: str, config: dict, *, special=(), prob=None,

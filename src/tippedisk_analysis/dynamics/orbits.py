@@ -94,6 +94,14 @@ def find_orbit(system: System, state, period: float, pars=None, *, segments: int
                          f"(amplitude {orbit.amplitude:.2g} in scaled units after {it} steps, residual "
                          f"{residual:.2g}): not a periodic orbit")
     elif status == "converged":
+        k = _covering(prob, orbit)
+        if k > 1:  # the guess went round k times: the orbit of the least period (its multipliers are mu^(1/k))
+            least = find_orbit(system, orbit.states[0], orbit.period / k, pars, segments=segments, phase=phase,
+                               shift=shift, tol=tol, newton_tol=newton_tol, max_iter=max_iter,
+                               amplitude_tol=amplitude_tol, pinned=pinned)
+            if least.converged:
+                least.message += f" (the guess T = {period:.6g} went {k} times round it)"
+                return least
         orbit.message = (f"periodic orbit, T = {orbit.period:.12g}, {it} Newton steps, residual {residual:.2g}; "
                          f"{_stability_text(orbit)}")
     else:
@@ -101,6 +109,24 @@ def find_orbit(system: System, state, period: float, pars=None, *, segments: int
                          f"x_(k+1)| / scale) at T = {orbit.period:.6g}, amplitude {orbit.amplitude:.3g}; no periodic "
                          "orbit near the guess")
     return orbit
+
+
+COVER_RTOL = 1e-6  # |x(T/k) - x(0)| / scale below this share of the amplitude: the orbit closes after T/k
+
+
+def _covering(prob: ShootingProblem, orbit: PeriodicOrbit, most: int = 7) -> int:
+    """The least k in 2 .. ``most`` for which the converged orbit closes after T/k already (1 if none): a
+    solution of the shooting equations with k times the orbit's least period."""
+    x0 = orbit.states[0]
+    scale = np.asarray(prob.system.state_scale)
+    for k in range(2, most + 1):
+        try:
+            x = prob.flow.advance(x0, orbit.period / k, orbit.pars)
+        except FlowError:
+            return 1
+        if np.max(np.abs(x - x0) / scale) <= COVER_RTOL * orbit.amplitude:
+            return k
+    return 1
 
 
 def _stability_text(orbit: PeriodicOrbit) -> str:

@@ -304,9 +304,12 @@ class ShootingProblem(continuation.Problem):
     def accept(self, kind: str, point, value: float, options) -> bool:
         if kind in ("period_doubling", "neimark_sacker", "branch_point"):
             return math.isfinite(value) and abs(value) <= max(MULTIPLIER_TOL, options.locate_tol)
-        if kind == "fold":  # at a Hopf end the parameter turns too (p - p_H ~ r^2): not a fold of cycles
+        if kind in ("fold", "hopf"):
+            # at a Hopf end the parameter turns too (p - p_H ~ r^2): not a fold of cycles; and the projected
+            # amplitude of a large orbit may change sign as its shape turns: a Hopf end needs amplitude zero
             ev = self._evaluate(point.u)
-            return "error" not in ev and float(np.linalg.norm(ev["half"])) > 1e-3 * self._half_ref_norm
+            small = "error" not in ev and float(np.linalg.norm(ev["half"])) <= 1e-3 * self._half_ref_norm
+            return ("error" not in ev) and (small if kind == "hopf" else not small)
         return True
 
     def describe(self, kind: str, u) -> dict:

@@ -23,13 +23,14 @@ import numpy as np
 
 from ..compilation import compiling
 from ..errors import ParameterError
+from .expressions import expand_integer_powers
 from .tensors import Field
 
 RESERVED = frozenset({
     "point", "eig", "eig_real", "eig_imag", "stability", "n_unstable", "max_real_eig", "arclength", "residual",
     "newton_iterations", "special_point", "special_kind", "special_label", "special_index", "special_value",
-    "special_frequency", "special_l1", "special_a", "critical_product", "period", "floquet", "sample", "state",
-    "orbit", "orbit_status", "amplitude", "multiplier_real", "multiplier_imag", "trivial", "time", "exponent",
+    "special_frequency", "special_l1", "special_degenerate", "special_a", "rejection", "unlocated",
+    "critical_product", "period", "floquet", "sample", "state", "orbit", "orbit_status", "amplitude", "multiplier_real", "multiplier_imag", "trivial", "time", "exponent",
     "exponents", "history", "history_time", "divergence_mean", "attractor", "outcome", "label", "crossing",
     "parameter", "value", "sample_time", "t", "tol"})
 """Names the generic datasets use for their own dimensions and variables: no state, parameter or
@@ -52,6 +53,7 @@ class Event:
     direction: str = "negative"
 
     def __post_init__(self):
+        object.__setattr__(self, "expression", expand_integer_powers(self.expression))
         if self.direction not in DIRECTIONS:
             raise ParameterError(f"event {self.name!r}: direction {self.direction!r}; give one of "
                                  f"{', '.join(DIRECTIONS)}")
@@ -88,7 +90,8 @@ class System:
             raise ParameterError("a System needs a name (a non-empty string), e.g. System('ab', ...)")
         self.name = name
         self.variables = tuple(variables)
-        self.rhs = tuple(hy.expression(f) if isinstance(f, int | float) else f for f in rhs)
+        self.declared_rhs = tuple(hy.expression(f) if isinstance(f, int | float) else f for f in rhs)
+        self.rhs = tuple(map(expand_integer_powers, self.declared_rhs))  # safe at zero bases (.expressions)
         if len(self.rhs) != len(self.variables) or not self.variables:
             raise ParameterError(f"system {name!r}: {len(self.variables)} variables but {len(self.rhs)} right-hand "
                                  "sides; give one right-hand side per variable")
@@ -101,8 +104,9 @@ class System:
         self.state_scale = np.ones(self.n) if state_scale is None else np.array(state_scale, dtype=float)
         if self.state_scale.shape != (self.n,) or not np.all(self.state_scale > 0):
             raise ParameterError(f"system {name!r}: state_scale needs {self.n} positive numbers")
-        self.observables = {k: (v if isinstance(v, tuple) else (v, "")) for k, v in (observables or {}).items()}
-        self.integrals = dict(integrals or {})
+        self.observables = {k: (expand_integer_powers(e), u) for k, (e, u) in
+                            ((k, v if isinstance(v, tuple) else (v, "")) for k, v in (observables or {}).items())}
+        self.integrals = {k: expand_integer_powers(e) for k, e in (integrals or {}).items()}
         self.events = tuple(events)
         self.n_trivial = int(n_trivial)
         self.units = dict(units or {})
@@ -162,7 +166,7 @@ class System:
         """A fingerprint of the declaration but the default parameter values: its name, names and expressions
         (datasets store it; a stored branch is continued with the same System; compiled code is shared by it)."""
         if self._key is None:
-            parts = [self.name, *self.state_names, *map(str, self.variables), *map(str, self.rhs),
+            parts = [self.name, *self.state_names, *map(str, self.variables), *map(str, self.declared_rhs),
                      *self.parameter_names, *(f"{k}={e}" for k, (e, _u) in self.observables.items()),
                      *(f"{k}={e}" for k, e in self.integrals.items()),
                      *(f"{e.name}:{e.direction}={e.expression}" for e in self.events), str(self.compact_mode)]
@@ -212,7 +216,7 @@ class System:
 
     def equations(self) -> list[str]:
         """The right-hand sides as text, e.g. "u1' = ..." (for the datasets' attributes: to read, not to eval)."""
-        return [f"{n}' = {f}" for n, f in zip(self.state_names, self.rhs)]
+        return [f"{n}' = {f}" for n, f in zip(self.state_names, self.declared_rhs)]
 
     def attrs(self, pars=None) -> dict:
         """The attributes generic datasets carry: name, fingerprint, names, equations, parameter values."""

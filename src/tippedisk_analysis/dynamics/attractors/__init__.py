@@ -28,10 +28,17 @@ State machine of one run (counts are consecutive samples; settings in :class:`Re
    stops no other run. Both are additions to the published method: they keep slowly escaping or
    drifting transients from claiming cells that belong to an attractor's neighbourhood.
 3. a terminal event of the integrator ends the run with the problem's label for it (e.g. ``fell``);
-   a non-finite state with ``failed``; the maximum horizon with ``undecided`` (the only way to get it).
+   a non-finite state with ``failed``, or with ``diverged`` if the problem's runs can escape
+   (:attr:`Problem.escapes`) and it was outside the grid; the maximum horizon with ``undecided`` (the only
+   way to get it), with the reason its last candidate was refused (:attr:`Problem.rejection_reasons`).
+
+A candidate is a claim to verify, not a result: the problem of a :class:`~tippedisk_analysis.dynamics.System`
+checks every kind by a criterion of its own (Newton and eigenvalues, shooting and multipliers, the largest
+Lyapunov exponent: :meth:`.system_problem.SystemProblem.describe`), because a window of fixed length
+mistakes the slow part of a relaxation cycle for an equilibrium.
 
 Labels: attractors get ids 0, 1, ... (per call of :func:`map_points`); the others are negative:
-:data:`SPECIAL_LABELS` followed by the problem's terminal labels (-4, -5, ...).
+:data:`SPECIAL_LABELS`, then the problem's terminal labels (-4, -5, ...), then ``diverged`` where it applies.
 
 Kinds (:func:`describe`, from the recorded samples y_k, k = 1..L, in cell units): with a1, a2 the
 largest peak-to-peak ranges over the first and the second half of the window,
@@ -53,12 +60,13 @@ within a threshold, each previous attractor used at most once; unmatched ones ge
 """
 
 from .mapping import MapResult, map_points
-from .problem import (DescribeContext, Problem, _circular_mean, combine, converging, describe,  # noqa: F401
+from .problem import (DescribeContext, Problem, circular_mean, combine, converging, describe,
                       equilibrium_description, growing, spreads)
 from .records import BASE_KINDS, SPECIAL_LABELS, Candidate, Description, FirstTime, Found, Grid, RecurrenceSettings
 from .tables import assemble_table, chunk_result, column_names, from_columns, match, merge, to_columns
 
 __all__ = ["BASE_KINDS", "SPECIAL_LABELS", "Candidate", "DescribeContext", "Description", "FirstTime", "Found", "Grid",
-           "MapResult", "Problem", "RecurrenceSettings", "assemble_table", "chunk_result", "column_names", "combine",
+           "MapResult", "Problem", "RecurrenceSettings", "assemble_table", "chunk_result", "circular_mean", "column_names",
+           "combine",
            "converging", "describe", "equilibrium_description", "from_columns", "growing", "map_points", "match",
            "merge", "spreads", "to_columns"]

@@ -11,7 +11,7 @@ import numpy as np
 
 from ...errors import ParameterError
 from .problem import DescribeContext, Problem, _nt_events, _radius, _time_limit, combine
-from .records import Candidate, FirstTime, Found, RecurrenceSettings
+from .records import DIVERGED, Candidate, FirstTime, Found, RecurrenceSettings
 
 
 # ------------------------------------------------------------------------------------- the mapper
@@ -25,6 +25,7 @@ class _Lane:
     lost: int = 0
     att: int = -1
     att_count: int = 0
+    rejection: int = 0  # why the run's last candidate was no attractor (Problem.rejection_reasons, 1-based)
     buf_t: list = dataclasses.field(default_factory=list)
     buf_x: list = dataclasses.field(default_factory=list)
     buf_y: list = dataclasses.field(default_factory=list)
@@ -42,6 +43,7 @@ class MapResult:
     final_observed: np.ndarray  # (D, N)
     event_times: dict  # nt event name -> (N,) first time (NaN: none)
     attractors: list  # [Found]
+    rejections: np.ndarray  # (N,) int8: why an undecided run's last candidate failed its check (0: none)
 
 
 def _terminal_index(outcome, n_terminal: int) -> int | None:
@@ -87,6 +89,7 @@ def map_points(problem: Problem, settings: RecurrenceSettings, x0, pars, groups=
     D = len(problem.grid.names)
 
     labels = np.full(N, label_of["undecided"], dtype=np.int64)
+    rejections = np.zeros(N, dtype=np.int8)
     t_assign = np.zeros(N)
     final = np.zeros((n, N))
     final_y = np.zeros((D, N))
@@ -116,6 +119,7 @@ def map_points(problem: Problem, settings: RecurrenceSettings, x0, pars, groups=
         lane = lanes[i]
         p = lane.point
         labels[p], t_assign[p] = label, t
+        rejections[p] = lane.rejection if label == label_of["undecided"] else 0
         final[:, p] = x
         final_y[:, p] = y
         for name, rec in zip(problem.nt_event_names, recorders):
@@ -139,9 +143,13 @@ def map_points(problem: Problem, settings: RecurrenceSettings, x0, pars, groups=
                 return a
         cand = Candidate(g, np.array(lane.buf_t), np.array(lane.buf_x).T, np.array(lane.buf_y).T, keys,
                          pars[:, lane.point].copy())
+        problem.rejection = 0
         desc = problem.describe(cand, ctx)
         if desc is None:
+            lane.rejection = problem.rejection
             return None
+        if desc.cells:
+            cellset = set(desc.cells)
         for a, f in enumerate(found):  # found again by a run that started locating before it was known
             if f.group == g and problem.same_attractor(f.description, desc):
                 f.description = combine(problem, [f.description, desc])
@@ -158,6 +166,11 @@ def map_points(problem: Problem, settings: RecurrenceSettings, x0, pars, groups=
             for k in cellset:
                 table.setdefault(k, idx)
         return idx
+
+    def escaped(lane: _Lane) -> int:
+        """The label of a run that became non-finite: ``diverged`` if it was outside the grid and moving
+        away (escape to infinity), ``failed`` (a numerical failure) otherwise."""
+        return label_of[DIVERGED] if problem.escapes and lane.lost > 0 else label_of["failed"]
 
     def step(lane: _Lane, t: float, x, y, key: int):
         """One sample of a run; returns a label when the run is decided, else None."""
@@ -257,7 +270,7 @@ def map_points(problem: Problem, settings: RecurrenceSettings, x0, pars, groups=
                     continue
                 lane.k = k + 1
                 if not finite[q]:
-                    decided = (label_of["failed"], k * dt, np.nan_to_num(X[:, q]), np.zeros(D))
+                    decided = (escaped(lane), k * dt, np.nan_to_num(X[:, q]), np.zeros(D))
                     continue
                 lab = step(lane, k * dt, X[:, q], Y[:, q], int(KEY[q]))
                 lane.last = (k * dt, X[:, q], Y[:, q])
@@ -273,13 +286,13 @@ def map_points(problem: Problem, settings: RecurrenceSettings, x0, pars, groups=
                 y_now = problem.observe(x_now[:, None], np.array(ta.pars)[:, i:i + 1])[:, 0]
                 finish(i, label_of[problem.terminal_labels[e]], float(ta.time[i]), x_now, y_now)
             elif oc == err_nf:
-                finish(i, label_of["failed"], float(ta.time[i]), np.nan_to_num(x_now), np.zeros(D))
+                finish(i, escaped(lane), float(ta.time[i]), np.nan_to_num(x_now), np.zeros(D))
             elif lane.k > k_last:  # the horizon: the last sample is the final state
                 t_last, x_last, y_last = lane.last
                 finish(i, label_of["undecided"], t_last, x_last, y_last)
             elif oc != time_limit and int(oc) != int(hy.taylor_outcome.success):
                 finish(i, label_of["failed"], float(ta.time[i]), np.nan_to_num(x_now), np.zeros(D))
-    return MapResult(labels, t_assign, final, final_y, events, found)
+    return MapResult(labels, t_assign, final, final_y, events, found, rejections)
 
 
 # ------------------------------------------------------------------------- merging and matching

@@ -9,7 +9,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .records import BASE_KINDS, SPECIAL_LABELS, Candidate, Description, FirstTime, Grid, RecurrenceSettings
+from .records import BASE_KINDS, DIVERGED, SPECIAL_LABELS, Candidate, Description, FirstTime, Grid, RecurrenceSettings
 
 
 # --------------------------------------------------------------------------------------- problems
@@ -23,7 +23,8 @@ class Problem:
        a run with ``terminal_labels[i]`` (event i); its non-terminal events with :class:`FirstTime`
        callbacks report first event times under ``nt_event_names``.
     4. ``observe(states (n, N), pars (npars, N)) -> (D, N)``: the observed coordinates of the grid.
-    5. ``describe(candidate, core)``: a :class:`Description` or None (reject); the default is the
+    5. ``describe(candidate, core)``: a :class:`Description` or None (reject, with ``rejection`` set to
+       1 + the index of the reason in ``rejection_reasons`` where there is one); the default is the
        generic :func:`describe`, which calls ``refine_equilibrium`` and ``amplitude_index``.
     6. ``same_attractor(a, b)``: whether two descriptions of one parameter point are one attractor
        (default: same kind, centroids within ``merge_distance`` cells);
@@ -38,6 +39,9 @@ class Problem:
     kinds: tuple[str, ...] = BASE_KINDS
     extra_names: tuple[str, ...] = ()
     amplitude_index: int = 0  # observed coordinate whose half peak-to-peak is the amplitude
+    escapes: bool = False  # runs may escape to infinity: label them ``diverged`` (else ``failed``)
+    rejection_reasons: tuple[str, ...] = ()  # why ``describe`` may find a candidate no attractor
+    rejection: int = 0  # set by ``describe`` when it returns None: 1 + index into rejection_reasons (0: none)
     merge_distance: float = 1.5  # cells
 
     @property
@@ -83,6 +87,8 @@ class Problem:
         out = dict(SPECIAL_LABELS)
         for i, name in enumerate(self.terminal_labels):
             out[name] = -len(SPECIAL_LABELS) - 1 - i
+        if self.escapes:
+            out[DIVERGED] = min(out.values()) - 1
         return out
 
 
@@ -199,7 +205,7 @@ def _extremum(z: np.ndarray, i: int) -> float:
     return float(z[i])
 
 
-def _circular_mean(grid: Grid, y: np.ndarray) -> np.ndarray:
+def circular_mean(grid: Grid, y: np.ndarray) -> np.ndarray:
     out = np.mean(y, axis=1)
     for j, per in enumerate(grid.periodic):
         if per:
@@ -254,7 +260,7 @@ def periodic_description(problem: Problem, state, pars, guess: float, core: Desc
         return None
     period, amplitude, ys, ts = ref
     whole = ys[:, ts <= ts[0] + period * math.floor((ts[-1] - ts[0]) / period)]  # whole periods
-    centroid = _circular_mean(grid, whole)
+    centroid = circular_mean(grid, whole)
     spread = 0.5 * np.ptp(grid.unwrap(whole), axis=1) * grid.widths
     return Description("periodic", problem.represent(state), centroid, spread, amplitude, period)
 
@@ -266,7 +272,7 @@ def describe(problem: Problem, cand: Candidate, core: DescribeContext) -> Descri
     L = yu.shape[1]
     h = L // 2
     a1, a2 = spreads(grid, cand.observed)
-    centroid = _circular_mean(grid, cand.observed)
+    centroid = circular_mean(grid, cand.observed)
     spread = 0.5 * np.ptp(yu[:, h:], axis=1) * grid.widths
     if growing(s, a1, a2):
         return None

@@ -11,6 +11,7 @@ import numpy as np
 from ...errors import ParameterError
 
 SPECIAL_LABELS = {"undecided": -1, "left_grid": -2, "failed": -3}
+DIVERGED = "diverged"  # the label of runs that escape to infinity (after the problem's terminal labels)
 BASE_KINDS = ("equilibrium", "periodic", "irregular")
 
 
@@ -177,6 +178,8 @@ class Description:
     extra: dict = dataclasses.field(default_factory=dict)
     radius: float = 0.0  # cells: largest distance (max-norm) of the attractor's cells from ``centroid``
     transient: bool = False  # a slowly evolving state, not an attractor: runs are assigned, its cells not kept
+    cells: tuple = ()  # the attractor's cell numbers where known (a closed orbit, an equilibrium's
+    # neighbourhood): they replace the cells of the window that found it
 
 
 @dataclasses.dataclass

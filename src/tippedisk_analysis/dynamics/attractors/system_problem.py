@@ -14,30 +14,40 @@ scheduler; finished chunks are kept next to ``output``).
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 
 import numpy as np
 import xarray as xr
 
-from ...errors import ParameterError
+from ...errors import ParameterError, TippediskError
 from ...results import index_coordinate, make_attrs
 from .. import sweeps
 from ..datasets import flag_attrs, label_coordinates, mixed_units, state_coordinates
 from ..system import System
 from .mapping import map_points
-from .problem import Problem, describe, equilibrium_description, periodic_description, return_lag
+from .problem import Problem, circular_mean, describe, equilibrium_description, periodic_description, return_lag
 from .records import BASE_KINDS, Candidate, Description, Grid, RecurrenceSettings
 from .tables import assemble_table, chunk_result, column_names
 
 TOL = 1e-10  # Taylor tolerance of the runs: classifications, not trajectories to round-off
-NEWTON_STEPS = 30  # Newton iterations towards the equilibrium of a contracting spiral
+NEWTON_STEPS = 30  # Newton iterations towards an equilibrium
+RESIDUAL_TOL = 1e-12  # |f| / state_scale of an equilibrium, relative to the size of its terms
+PERIOD_RTOL = 1e-3  # the shooting period of a periodic attractor against the recorded return time
+NEIGHBOURHOOD = 2.0  # cells (max-norm) around an equilibrium that become its cells
+IRREGULAR_MERGE = 0.25  # two irregular attractors whose centroids differ by at most this share of their spread
 LONG_WINDOWS = 10  # an irregular candidate's run goes on this many locate windows in search of a return
+RETURN_REFERENCES = 8  # samples of the long run's second half tried as the state a return comes back to
 
 
 class SystemProblem(Problem):
     """A :class:`~tippedisk_analysis.dynamics.System` for the recurrence core: integrated in batch mode with
     its terminal events (their names label the runs they end), observed through ``grid``'s coordinates."""
+
+    escapes = True
+    rejection_reasons = ("not_equilibrium", "unstable_equilibrium", "orbit_not_closed", "unstable_orbit",
+                         "contracting")
 
     def __init__(self, system: System, grid: Grid, *, tol: float = TOL, events=True):
         self.system, self.grid, self.tol = system, grid, float(tol)
@@ -51,56 +61,164 @@ class SystemProblem(Problem):
                                      f"{system.name} ({', '.join((*system.state_names, *system.observables))})")
 
     def describe(self, candidate: Candidate, core) -> Description | None:
-        """The generic description (:func:`.problem.describe`), with two checks for what a window of the
-        settings' length (which knows no time scale of the system) can miss before a candidate is called
-        irregular:
+        """The generic description (:func:`.problem.describe`), each kind verified by a criterion of its own
+        before it is an attractor (a window of the settings' length knows no time scale of the system: the slow
+        part of a relaxation cycle looks like an equilibrium there):
 
-        * a slowly contracting spiral is its equilibrium: Newton's method from the samples' mean finds an
-          equilibrium x*; it is the attractor if it is linearly stable and the samples approach it in the
-          Lyapunov function V = (x - x*)^T P (x - x*) of its linearisation (A^T P + P A = -I): V at the end
-          below half its value at the start, and below it over each half;
-        * an orbit longer than the window: the run goes on for up to LONG_WINDOWS windows and a return
-          (:func:`.problem.return_lag`) makes it a periodic attractor with the refined period."""
+        * an equilibrium: Newton's method from the settled state converges to a point within
+          ``equilibrium_spread`` cells of it, whose residual |f| / state_scale is at Newton's level and whose
+          eigenvalues all have negative real parts; or the samples contract to such a point in the Lyapunov
+          function V = (x - x*)^T P (x - x*) of its linearisation (A^T P + P A = -I): a slow spiral;
+        * a periodic orbit: shooting from the recorded state with the recorded period closes the orbit, with
+          the period within ``PERIOD_RTOL`` of the recorded one and every nontrivial multiplier inside the unit
+          circle; the cells of the whole orbit become the attractor's;
+        * an orbit longer than the window: the run goes on for LONG_WINDOWS windows and a return
+          (:func:`.problem.return_lag`) to one of RETURN_REFERENCES of its samples is verified as above;
+        * irregular: no equilibrium or orbit verified, and the largest Lyapunov exponent is not negative
+          (chaos or a torus); a contracting run is no attractor yet.
+
+        A candidate that fails its check is no attractor (None): its run searches on, and is ``undecided``
+        at the horizon, with the reason (``rejection_reasons``) of its last candidate."""
         desc = describe(self, candidate, core)
-        if desc is None or desc.kind != "irregular":
-            return desc
-        x = self._contracting_equilibrium(candidate)
+        if desc is not None and desc.kind == "equilibrium":
+            return self._with_neighbourhood(desc, candidate.observed)
+        if desc is not None and desc.kind == "periodic":
+            verified = self._verified_orbit(desc, candidate.pars)
+            if verified is not None:
+                return verified
+        x = self._contracting_equilibrium(candidate.states, candidate.pars)
         if x is not None:
-            return equilibrium_description(self, candidate, {"state": x})
-        s = core.settings
+            return self._with_neighbourhood(equilibrium_description(self, candidate, {"state": x}), candidate.observed)
+        s = core.settings  # a longer look: a return, a slow contraction, or a run that does neither
         times = s.dt * np.arange(LONG_WINDOWS * candidate.times.size + 1)
         states = core.sample(candidate.states[:, -1], candidate.pars, times)
         if states is None:
-            return desc
-        lag = return_lag(self.grid, s, self.observe(states, np.asarray(candidate.pars)), times)
-        periodic = None if lag is None else periodic_description(self, states[:, -1], candidate.pars, lag, core)
-        return desc if periodic is None else periodic
+            return None
+        observed = self.observe(states, np.asarray(candidate.pars))
+        for end in np.linspace(len(times) - 1, len(times) // 2, RETURN_REFERENCES).astype(int):
+            # a return to the sample at ``end`` (the last sample may lie on a fast jump, which has none)
+            lag = return_lag(self.grid, s, observed[:, : end + 1], times[: end + 1])
+            if lag is not None:
+                periodic = periodic_description(self, states[:, end], candidate.pars, lag, core)
+                verified = None if periodic is None else self._verified_orbit(periodic, candidate.pars)
+                if verified is not None:
+                    return verified
+                break  # a near return of an orbit that does not close (a chaotic run comes close to itself)
+        x = self._contracting_equilibrium(states, candidate.pars)
+        if x is not None:
+            return self._with_neighbourhood(equilibrium_description(self, candidate, {"state": x}), observed)
+        if desc is None or desc.kind != "irregular":
+            return None  # growing, or an equilibrium that failed its check: no attractor yet
+        if not self._not_contracting(states[:, -1], candidate.pars, max(s.horizon, times[-1])):
+            return None
+        spread = 0.5 * np.ptp(self.grid.unwrap(observed), axis=1) * self.grid.widths  # the long run's, not the window's
+        return dataclasses.replace(desc, centroid=circular_mean(self.grid, observed), spread=spread)
 
-    def _contracting_equilibrium(self, candidate: Candidate) -> np.ndarray | None:
-        from scipy.linalg import solve_continuous_lyapunov
+    def same_attractor(self, a: Description, b: Description) -> bool:
+        """As :meth:`.problem.Problem.same_attractor`; two irregular sets (chaos: a run's mean wanders by more
+        than a cell) are one when their centroids differ by at most IRREGULAR_MERGE of their spread."""
+        if a.kind == b.kind == "irregular":
+            spread = np.maximum(np.maximum(a.spread, b.spread), self.grid.widths)
+            return bool(np.all(np.abs(self.grid.difference(a.centroid, b.centroid)) * self.grid.widths
+                               <= IRREGULAR_MERGE * spread))
+        return super().same_attractor(a, b)
 
-        x = np.mean(candidate.states, axis=1)
-        pars = np.asarray(candidate.pars, dtype=float)
+    def _with_neighbourhood(self, desc: Description, observed) -> Description:
+        """An equilibrium with the cells of the samples ``observed`` (D, L) within NEIGHBOURHOOD cells of it as
+        its cells (a run through the window's earlier cells, e.g. past a saddle, is not yet in its basin)."""
+        near = np.max(np.abs(self.grid.difference(observed, desc.centroid[:, None])), axis=0) <= NEIGHBOURHOOD
+        keys = self.grid.keys(np.concatenate([desc.centroid[:, None], observed[:, near]], axis=1))
+        return dataclasses.replace(desc, cells=tuple(int(k) for k in np.unique(keys[keys >= 0])))
+
+    def _reject(self, reason: str) -> None:
+        self.rejection = 1 + self.rejection_reasons.index(reason)
+
+    def refine_equilibrium(self, state, pars, core) -> dict | None:
+        """The settled state's equilibrium by Newton's method, if it is one and stable (:meth:`describe`)."""
+        x0 = core.settle(state, pars)
+        x = self._newton(x0, pars)
+        if x is None:
+            self._reject("not_equilibrium")
+            return None
+        if np.max(np.abs(self.grid.difference(*(self.observe(np.stack([x, x0], axis=1), pars)[:, k:k + 1]
+                                                   for k in (0, 1))))) > max(1.0, core.settings.equilibrium_spread):
+            self._reject("not_equilibrium")
+            return None
+        if np.max(np.linalg.eigvals(self.system.jacobian(x, pars)).real) >= 0:
+            self._reject("unstable_equilibrium")
+            return None
+        return {"state": x}
+
+    def _newton(self, x, pars) -> np.ndarray | None:
+        """An equilibrium near x: Newton's method to a residual |f| / state_scale at round-off, or None."""
+        pars = np.asarray(pars, dtype=float)
+        scale = self.system.state_scale
         for _ in range(NEWTON_STEPS):
+            J = self.system.jacobian(x, pars)
+            f = self.system.f(x, pars)
+            if np.max(np.abs(f) / scale) <= RESIDUAL_TOL * (1.0 + np.abs(J) @ np.abs(x) / scale).max():
+                return x
             try:
-                step = np.linalg.solve(self.system.jacobian(x, pars), -self.system.f(x, pars))
+                x = x + np.linalg.solve(J, -f)
             except np.linalg.LinAlgError:
                 return None
-            x = x + step
             if not np.all(np.isfinite(x)):
                 return None
-            if np.max(np.abs(step)) <= 1e-13 * (1.0 + np.max(np.abs(x))):
-                break
-        else:
+        return None
+
+    def _contracting_equilibrium(self, states, pars) -> np.ndarray | None:
+        """A stable equilibrium x* that the samples ``states`` (n, L) approach (:meth:`describe`), or None."""
+        from scipy.linalg import solve_continuous_lyapunov
+
+        pars = np.asarray(pars, dtype=float)
+        x = self._newton(np.mean(states, axis=1), pars)
+        if x is None:
             return None
         A = self.system.jacobian(x, pars)
         if np.max(np.linalg.eigvals(A).real) >= 0:
             return None
         P = solve_continuous_lyapunov(A.T, -np.eye(self.system.n))
-        d = candidate.states - x[:, None]
+        d = states - x[:, None]
         V = np.einsum("il,ij,jl->l", d, P, d)
         h = len(V) // 2
         return x if V[-1] < 0.5 * V[0] and V[h:].max() < V[:h].max() else None
+
+    def _verified_orbit(self, desc: Description, pars) -> Description | None:
+        """``desc`` with the shooting orbit's period, state and cells if the orbit closes and is stable."""
+        from ..flows import STABILITY
+        from ..orbits import find_orbit
+
+        for segments in (1, 4):
+            orbit = find_orbit(self.system, desc.representative, desc.period, pars, segments=segments)
+            if orbit.converged:
+                break
+        else:
+            self._reject("orbit_not_closed")
+            return None
+        if abs(orbit.period - desc.period) > PERIOD_RTOL * desc.period:
+            self._reject("orbit_not_closed")
+            return None
+        if orbit.stability != STABILITY["stable"]:
+            self._reject("unstable_orbit")
+            return None
+        keys = self.grid.keys(self.observe(orbit.samples.T, np.asarray(pars)))
+        return dataclasses.replace(desc, representative=orbit.states[0], period=float(orbit.period),
+                                   cells=tuple(int(k) for k in np.unique(keys[keys >= 0])))
+
+    def _not_contracting(self, state, pars, window: float) -> bool:
+        """Whether the largest Lyapunov exponent from ``state`` over ``window`` is not negative (> -3 / window,
+        the finite-time error of a neutral direction): an irregular attractor (chaos, a torus) rather than a
+        slow approach to something else."""
+        from ..lyapunov import spectrum
+
+        try:
+            exponent = spectrum(self.system, state, pars, n_exponents=1, t_end=window, dt=window / 50).exponents[0]
+        except TippediskError:
+            exponent = math.nan
+        if exponent > -3.0 / window:
+            return True
+        self._reject("contracting")
+        return False
 
     def integrator(self, batch_size: int):
         return self.system.taylor(self.tol, batch=int(batch_size), events=self._events)
@@ -131,13 +249,14 @@ def _initial_states(system: System, state, axes: dict, start: int, stop: int) ->
 def basin_chunk(system: System, config: dict, start: int, stop: int) -> dict:
     """Points [start, stop) of a basin map of ``system`` (module-level: a dask worker runs it)."""
     grid = Grid.from_dict(config["grid"])
-    prob = _problem(system, grid, float(config["tol"]))
+    prob = SystemProblem(system, grid, tol=float(config["tol"]))  # one per chunk: it records rejections
     x0 = _initial_states(system, config["state"], config["axes"], start, stop)
     res = map_points(prob, RecurrenceSettings(**config["recurrence"]), x0, np.asarray(config["pars"]),
                      np.zeros(stop - start, dtype=np.int64), int(config["batch_size"]))
     out = chunk_result(prob, res, start)
     out.update({f"final_{n}": res.final_states[i] for i, n in enumerate(system.state_names)})
-    return {k: np.where(np.isfinite(v), v, 0.0) if v.dtype.kind == "f" else v for k, v in out.items()}
+    out["rejection"] = res.rejections
+    return out
 
 
 def _assemble(system: System, config: dict, results: dict) -> xr.Dataset:
@@ -182,10 +301,18 @@ def _assemble(system: System, config: dict, results: dict) -> xr.Dataset:
                    **label_coordinates("observed", grid.names, [system.units_of(n) for n in grid.names],
                                        "observed coordinate of the cell grid")})
     counts = ", ".join(f"{int(np.sum(outcome == v))} {k}" for k, v in labels.items())
+    rejection = np.asarray(results["rejection"]).astype(np.int8)
+    reasons = SystemProblem.rejection_reasons
+    why = ", ".join(f"{int(np.sum(rejection == i + 1))} {r}" for i, r in enumerate(reasons)
+                    if np.any(rejection == i + 1))
     message = (f"{system.name}: {n} runs, {len(table)} attractor(s) (" + ", ".join(
-        f"A{i} {d.kind} {np.mean(outcome == i):.3g}" for i, d in enumerate(table)) + f"); {counts}")
+        f"A{i} {d.kind} {np.mean(outcome == i):.3g}" for i, d in enumerate(table)) + f"); {counts}"
+        + (f" (last candidate: {why})" if why else ""))
     undecided = int(np.sum(outcome == labels["undecided"]))
     status = "partial" if np.any(outcome == labels["failed"]) else "completed"
+    data["rejection"] = (dims, rejection.reshape(shape), flag_attrs(
+        "why the last attractor candidate of an undecided run failed its check (0: none)",
+        {"none": 0, **{r: i + 1 for i, r in enumerate(reasons)}}))
     attrs = make_attrs("basins", config, status, message, **system.attrs(np.asarray(config["pars"])),
                        swept=" ".join(dims), undecided=undecided)
     return xr.Dataset(data, coords=coords, attrs=attrs)
@@ -212,7 +339,7 @@ def basins(system: System, grid: Grid, axes: dict, *, state=None, pars=None, hor
               "pars": list(map(float, system.with_pars(pars))), "grid": grid.to_dict(), "tol": float(tol),
               "batch_size": int(batch_size), "recurrence": settings.to_dict()}
     variables = ("att_key", "t_assign", "attractor_distance", *column_names(SystemProblem(system, grid, tol=tol)),
-                 *(f"final_{n}" for n in system.state_names))
+                 *(f"final_{n}" for n in system.state_names), "rejection")
     n_points = int(np.prod([a[2] for a in axes.values()]))
     sweep = sweeps.Sweep(f"basins of {system.name}", config, n_points, int(chunk_size), variables,
                          functools.partial(basin_chunk, system), functools.partial(_assemble, system, config),
