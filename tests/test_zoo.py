@@ -267,6 +267,22 @@ def test_subcritical_hopf_point_and_its_unstable_orbits():
     assert int(po.stability[k]) == 2  # unstable
 
 
+def test_an_orbit_branch_into_a_canard_explosion_says_it_stalled():
+    """eps = 0.05: from the Hopf point a = 1 the orbits grow within ~1e-9 of a = 0.9935 (the canard explosion);
+    shooting creeps there. The branch says so (status stalled, not completed), and its last orbit is right: its
+    period is scipy's return time from its own state."""
+    s = zoo.canard()
+    eq = dy.equilibrium_branch(s, [1.2, 1.2**3 / 3 - 1.2], "a", bounds=(0.0, 1.2), direction=-1)
+    assert list(eq.special_label.values) == ["HOPF1"] and float(eq.special_l1[0]) < 0
+    assert float(eq.a[int(eq.special_index[0])]) == pytest.approx(1.0, abs=1e-12)
+    po = dy.orbit_branch(s, eq, "HOPF1", bounds=(0.0, 1.2))
+    assert po.attrs["status"] == "stalled" and "canard" in po.attrs["message"]
+    a, T, state = float(po.a[-1]), float(po.period[-1]), po.initial_state.values[-1]
+    assert 0.99 < a < 1.0
+    run = zoo.reference_run(lambda t, u: [(u[1] - u[0] ** 3 / 3 + u[0]) / 0.05, a - u[0]], state, T)
+    np.testing.assert_allclose(run.y[:, -1], state, atol=1e-6)
+
+
 def test_selkov_hopf_points_equal_the_trace_condition():
     """Sel'kov (a = 0.08): the equilibrium (b, b / (a + b^2)) loses stability where the trace of its Jacobian,
     -1 + 2 b^2 / (a + b^2) - (a + b^2), vanishes: two Hopf points, located to 1e-9."""

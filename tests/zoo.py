@@ -83,6 +83,11 @@ def selkov(b: float = 0.6) -> dy.System:
     return dy.System("selkov_user", [x, y], [-x + 0.08 * y + x**2 * y, p0 - 0.08 * y - x**2 * y], parameters={"b": b})
 
 
+def canard(eps: float = 0.05) -> dy.System:
+    """eps x' = y - x^3/3 + x, y' = a - x: a Hopf point at a = 1, and the canard explosion just below it."""
+    return dy.System("canard_user", [x, y], [(y - x**3 / 3 + x) / eps, p0 - x], parameters={"a": 1.2})
+
+
 def damped_oscillator(delta: float = 0.04) -> dy.System:
     """x'' + delta x' + x = 0: eigenvalues -delta/2 +- i sqrt(1 - delta^2/4), a slow spiral into the origin."""
     return dy.System("damped_user", [x, y], [y, -p0 * y - x], parameters={"delta": delta})

@@ -302,7 +302,8 @@ def continue_branch(problem: Problem, u0: np.ndarray, options: Options = Options
             break
         if len(points) >= STALL_POINTS and _span(points, first) <= STALL_TOL * (1 + abs(points[-1].u[first])):
             status, message = "stalled", (f"stalled: {STALL_POINTS} points within {_span(points, first):.2g} of "
-                                          f"{_where(problem, points[-1].u)} (a vertical branch or a creeping step)")
+                                          f"{_where(problem, points[-1].u)} (a vertical branch, e.g. a canard "
+                                          "explosion; raise ds_max or continue in another parameter)")
             break
         last = points[-1]
         u_new, iterations = _step(problem, last, ds, options)
