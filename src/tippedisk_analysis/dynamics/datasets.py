@@ -115,7 +115,7 @@ def continuation_dataset(br: Branch, prob, info: dict | None = None) -> xr.Datas
         "special_point": index_coordinate("special_point", len(br.special_points), "special point index")})
     free = [p.name for p in prob.free]
     labels = summary([f"{sp.label} at " + ", ".join(f"{name} = {sp.u[n + j]:.8g}" for j, name in enumerate(free))
-                      + (" (degenerate: l1 = 0)" if sp.data.get("class") == "degenerate" else "")
+                      + (DEGENERATE_NOTE if sp.data.get("class") == "degenerate" else "")
                       for sp in br.special_points])
     what = (f"curve of {'Hopf' if prob.critical == 'hopf' else 'zero-eigenvalue'} points" if prob.critical
             else "branch of equilibria")
@@ -129,6 +129,9 @@ def continuation_dataset(br: Branch, prob, info: dict | None = None) -> xr.Datas
                           critical=prob.critical or "equilibria",
                           labels=" ".join(sp.label for sp in br.special_points), **unlocated_attrs(br))
     return ds
+
+
+DEGENERATE_NOTE = " (degenerate: l1 = 0, a generalised Hopf point or a centre)"
 
 
 def summary(items: list[str], limit: int = 6) -> str:
