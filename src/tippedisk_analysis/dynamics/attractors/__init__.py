@@ -66,7 +66,7 @@ from .records import BASE_KINDS, SPECIAL_LABELS, Candidate, Description, FirstTi
 from .tables import assemble_table, chunk_result, column_names, from_columns, match, merge, to_columns
 
 __all__ = ["BASE_KINDS", "SPECIAL_LABELS", "Candidate", "DescribeContext", "Description", "FirstTime", "Found", "Grid",
-           "MapResult", "Problem", "RecurrenceSettings", "assemble_table", "chunk_result", "circular_mean", "column_names",
-           "combine",
+           "MapResult", "Problem", "RecurrenceSettings", "assemble_table", "chunk_result", "circular_mean",
+           "column_names", "combine",
            "converging", "describe", "equilibrium_description", "from_columns", "growing", "map_points", "match",
            "merge", "spreads", "to_columns"]

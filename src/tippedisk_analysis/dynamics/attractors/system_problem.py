@@ -25,6 +25,9 @@ from ...errors import ParameterError, TippediskError
 from ...results import index_coordinate, make_attrs
 from .. import sweeps
 from ..datasets import flag_attrs, label_coordinates, mixed_units, state_coordinates
+from ..flows import STABILITY
+from ..lyapunov import spectrum
+from ..orbits import find_orbit
 from ..system import System
 from .mapping import map_points
 from .problem import Problem, circular_mean, describe, equilibrium_description, periodic_description, return_lag
@@ -65,8 +68,8 @@ class SystemProblem(Problem):
         before it is an attractor (a window of the settings' length knows no time scale of the system: the slow
         part of a relaxation cycle looks like an equilibrium there):
 
-        * an equilibrium: Newton's method from the settled state converges to a point within
-          ``equilibrium_spread`` cells of it, whose residual |f| / state_scale is at Newton's level and whose
+        * an equilibrium: Newton's method from the settled state converges to a point within a cell (or
+          ``equilibrium_spread`` cells) of it, whose residual |f| / state_scale is at Newton's level and whose
           eigenvalues all have negative real parts; or the samples contract to such a point in the Lyapunov
           function V = (x - x*)^T P (x - x*) of its linearisation (A^T P + P A = -I): a slow spiral;
         * a periodic orbit: shooting from the recorded state with the recorded period closes the orbit, with
@@ -88,7 +91,8 @@ class SystemProblem(Problem):
                 return verified
         x = self._contracting_equilibrium(candidate.states, candidate.pars)
         if x is not None:
-            return self._with_neighbourhood(equilibrium_description(self, candidate, {"state": x}), candidate.observed)
+            equilibrium = equilibrium_description(self, candidate, {"state": x})
+            return self._with_neighbourhood(equilibrium, candidate.observed)
         s = core.settings  # a longer look: a return, a slow contraction, or a run that does neither
         times = s.dt * np.arange(LONG_WINDOWS * candidate.times.size + 1)
         states = core.sample(candidate.states[:, -1], candidate.pars, times)
@@ -185,9 +189,6 @@ class SystemProblem(Problem):
 
     def _verified_orbit(self, desc: Description, pars) -> Description | None:
         """``desc`` with the shooting orbit's period, state and cells if the orbit closes and is stable."""
-        from ..flows import STABILITY
-        from ..orbits import find_orbit
-
         for segments in (1, 4):
             orbit = find_orbit(self.system, desc.representative, desc.period, pars, segments=segments)
             if orbit.converged:
@@ -209,8 +210,6 @@ class SystemProblem(Problem):
         """Whether the largest Lyapunov exponent from ``state`` over ``window`` is not negative (> -3 / window,
         the finite-time error of a neutral direction): an irregular attractor (chaos, a torus) rather than a
         slow approach to something else."""
-        from ..lyapunov import spectrum
-
         try:
             exponent = spectrum(self.system, state, pars, n_exponents=1, t_end=window, dt=window / 50).exponents[0]
         except TippediskError:
