@@ -154,14 +154,17 @@ class SystemProblem(Problem):
         return {"state": x}
 
     def _newton(self, x, pars) -> np.ndarray | None:
-        """An equilibrium near x: Newton's method to a residual |f| / state_scale at round-off, or None."""
+        """An equilibrium near x: Newton's method to a residual |f| / state_scale at round-off (below
+        RESIDUAL_TOL of the size of its terms, then one more step), or None."""
         pars = np.asarray(pars, dtype=float)
         scale = self.system.state_scale
+        converged = False
         for _ in range(NEWTON_STEPS):
             J = self.system.jacobian(x, pars)
             f = self.system.f(x, pars)
-            if np.max(np.abs(f) / scale) <= RESIDUAL_TOL * (1.0 + np.abs(J) @ np.abs(x) / scale).max():
+            if converged:
                 return x
+            converged = np.max(np.abs(f) / scale) <= RESIDUAL_TOL * (1.0 + np.abs(J) @ np.abs(x) / scale).max()
             try:
                 x = x + np.linalg.solve(J, -f)
             except np.linalg.LinAlgError:
