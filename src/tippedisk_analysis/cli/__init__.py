@@ -7,7 +7,8 @@ Thin: parse, call the library, print one line. The promises every command keeps:
 * an existing output is replaced only with ``--overwrite`` (two runs started together on one
   output both finish; the last one's rename wins, nothing is half-written);
 * Ctrl-C: one line saying what was kept (chunks, a checkpoint) and how to resume, exit status 130;
-* a run that ended with a numerical failure (status nonfinite / not_converged) exits with 1.
+* a run that ended with a numerical failure (status nonfinite, not_converged, zeno, failed) or a branch that
+  stalled or whose corrector failed exits with 1.
 """
 
 from __future__ import annotations

@@ -16,16 +16,20 @@ from .common import add_disk, add_output, disk_from_args, disk_options_given, fi
 from .registry import command
 
 EXIT_NO_ORBIT = 3
+ORBIT_SYSTEMS = ("vanderpol", "hopf", "bautin", "roessler", "torus", "homoclinic", "duffing", "ab")
+"""The catalogue systems with an orbit or Hopf start (dynamics.TEXTBOOK; a test holds the two equal: --help
+imports no heyoka)."""
 
 
 def _arguments(p) -> None:
     source = p.add_argument_group("start (give exactly one)")
     source.add_argument("--from-hopf", metavar="FILE:LABEL", help="a Hopf point of a continuation dataset, e.g. "
-                                                                  "c.nc:HOPF1 (tippedisk continue)")
+                                                                  "c.nc:HOPF1 (tippedisk continue, or a branch of a "
+                                                                  "textbook system: its orbit branch, to --to)")
     source.add_argument("--from-run", metavar="FILE", help="a simulation (tippedisk simulate): of an ODE model, Newton "
                         "from a Poincaré return; of Models 1/2 (m1, m2, h1), the rolling motion at its end: its "
                         "returns to gamma = pi/2, torus or orbit, and the orbit they wind around")
-    source.add_argument("--system", help="a textbook system: vanderpol, hopf, bautin, roessler, torus, homoclinic")
+    source.add_argument("--system", help=f"a textbook system: {', '.join(ORBIT_SYSTEMS)}")
     source.add_argument("--from-orbit", metavar="FILE:POINT", help="an orbit of a periodic_orbits dataset, e.g. "
                                                                     "b.nc:5 (corrected, then continued with --to)")
     source.add_argument("--frictionless", metavar="BRANCH:OMEGA", help="the tippedisk without friction (mu = 0): "
@@ -81,7 +85,11 @@ def periodic_orbits(args) -> int:
             raise ParameterError(f"--amplitudes {args.amplitudes!r}: give numbers separated by commas") from None
         if not amplitudes or any(not a > 0 for a in amplitudes):
             raise ParameterError("--amplitudes must be positive numbers, e.g. 0.001,0.01")
-        ds = orbits.tippedisk_orbits_from_hopf(results.load(path), label, amplitudes, max_iter=args.max_iter)
+        source = results.load(path)
+        if "setup" in results.config_of(source):
+            ds = orbits.tippedisk_orbits_from_hopf(source, label, amplitudes, max_iter=args.max_iter)
+        else:
+            ds = _generic_hopf_branch(args, source, path, label)
     elif args.from_run:
         ds = _from_run(args, results.load(args.from_run))
     elif args.from_orbit:
@@ -171,6 +179,31 @@ def _textbook_hopf_branch(args, system, tb):
                        bounds=(min(value, args.to), max(value, args.to)), segments=args.segments or 4,
                        phase=args.phase or "integral", period_max=args.period_max, options=options,
                        config={"source": "textbook", "facts": tb.facts, "to": args.to})
+
+
+def _generic_hopf_branch(args, source, path: str, label: str):
+    """--from-hopf on a branch of a generic System: a catalogue system is rebuilt by name (its fingerprint must
+    match the file's); a user's System cannot be (equations stored in a file are never evaluated)."""
+    from .. import dynamics as dy
+    from ..dynamics import continuation
+    from ..results import config_of
+
+    name, key = source.attrs.get("system", ""), source.attrs.get("system_key", "")
+    if name not in dy.TEXTBOOK or dy.textbook_system(name).key != key:
+        raise ParameterError(f"{path} holds a branch of the system {name!r}, which the command line cannot rebuild "
+                             "(equations in a file are never evaluated); continue it in Python: dy.orbit_branch("
+                             f"system, td.load({path!r}), {label!r}, bounds=(low, high))")
+    parameter = source.attrs.get("parameters", "")
+    low, high = config_of(source).get("bounds", {}).get(parameter, (None, None))
+    if args.to is not None:
+        index, _kind = dy.special_point(source, label)
+        value = float(source[parameter].values[index])
+        low, high = min(value, args.to), max(value, args.to)
+    if low is None:
+        raise ParameterError(f"{path} stores no bounds of {parameter!r}; give --to")
+    options = continuation.Options(ds=0.02, ds_max=0.2, max_points=args.max_points)
+    return dy.orbit_branch(dy.textbook_system(name), source, label, bounds=(low, high), segments=args.segments or 4,
+                           phase=args.phase or "integral", period_max=args.period_max, options=options)
 
 
 def _orbit_or_branch(args, orbit, parameter: str, config: dict):

@@ -20,6 +20,9 @@ INITIAL = (  # option, InitialState field, help
     ("gamma-dot", "gamma_dot", "rate gamma_dot(0) [rad/s] (default -alpha_dot cos(beta): no spin about the normal)"),
 )
 
+NUMERICAL_FAILURES = ("nonfinite", "not_converged", "zeno", "failed")
+"""Statuses of a run that the numerics ended (exit 1); fell and lift_off are physical endings (exit 0)."""
+
 
 def _arguments(p) -> None:
     p.add_argument("--model", default="ode-euler",
@@ -105,4 +108,4 @@ def simulate(args) -> int:
         raise Interrupted(_interrupted(checkpoint)) from None
     results.save(ds, output)
     print(f"{show(output)}: {ds.attrs['model']} {ds.attrs['status']}: {ds.attrs['message']}")
-    return 1 if ds.attrs["status"] in ("nonfinite", "not_converged") else 0
+    return 1 if ds.attrs["status"] in NUMERICAL_FAILURES else 0

@@ -8,10 +8,11 @@ import numpy as np
 import xarray as xr
 from matplotlib.colors import BoundaryNorm, ListedColormap
 
+from .labels import axis_label, is_tippedisk, unit
 from .registry import figure
 
-LABEL_COLOURS = {"undecided": "0.6", "left_grid": "0.3", "failed": "black", "fell": "tab:red",
-                 "lift_off": "tab:pink"}
+LABEL_COLOURS = {"undecided": "0.6", "left_grid": "0.3", "failed": "black", "diverged": "tab:brown",
+                 "fell": "tab:red", "lift_off": "tab:pink"}
 KIND_COLOURS = {"equilibrium": ["tab:green", "darkgreen", "limegreen", "seagreen"], "wobbling": ["olive", "yellowgreen"],
                 "rolling": ["tab:orange", "darkorange"], "periodic": ["tab:purple", "indigo"],
                 "irregular": ["tab:brown", "sienna"]}
@@ -49,8 +50,9 @@ def _class_map(ax, fig, ds: xr.Dataset, da: xr.DataArray, x: str, y: str, title:
                          cmap=cmap, norm=norm, shading="nearest")
     cbar = fig.colorbar(mesh, ax=ax, ticks=np.arange(len(values)))
     cbar.ax.set_yticklabels(names, fontsize=7)
-    ax.set(xlabel=f"{x} [{ds[x].attrs.get('units', '')}]", ylabel=f"{y} [{ds[y].attrs.get('units', '')}]",
-           title=title)
+    physical = is_tippedisk(ds)
+    ax.set(xlabel=axis_label(x, ds[x].attrs.get("units", ""), physical),
+           ylabel=axis_label(y, ds[y].attrs.get("units", ""), physical), title=title)
 
 
 def _panels(ds: xr.Dataset):
@@ -90,6 +92,11 @@ def _table_text(ds: xr.Dataset) -> str:
     return "\n".join(lines)
 
 
+def _assignment_label(ds: xr.Dataset) -> str:
+    """"time to assignment [unit]" in the dataset's time units (a user's System: often dimensionless)."""
+    return f"time to assignment [{unit(ds['assignment_time'].attrs.get('units', 's'))}]"
+
+
 @figure("basins")
 def basins_figure(ds: xr.Dataset):
     """Basin map over the two initial values, time to assignment, and the table of attractors."""
@@ -100,14 +107,14 @@ def basins_figure(ds: xr.Dataset):
         _class_map(axes[0], fig, ds, ds["outcome"], x, y, "attractor reached (basins)")
         mesh = axes[1].pcolormesh(ds[x], ds[y], ds["assignment_time"].transpose(y, x), shading="nearest",
                                   cmap="viridis")
-        fig.colorbar(mesh, ax=axes[1], label="time to assignment [s]")
+        fig.colorbar(mesh, ax=axes[1], label=_assignment_label(ds))
         axes[1].set(xlabel=axes[0].get_xlabel(), ylabel=axes[0].get_ylabel(), title="time to decision")
     else:
         x = dims[0]
         axes[0].plot(ds[x], ds["outcome"], ".", color="k")
         axes[0].set(xlabel=x, ylabel="outcome (attractor id or label)")
         axes[1].plot(ds[x], ds["assignment_time"], ".")
-        axes[1].set(xlabel=x, ylabel="time to assignment [s]")
+        axes[1].set(xlabel=x, ylabel=_assignment_label(ds))
     fracs = ", ".join(f"A{i} {100 * float(f):.1f}%" for i, f in enumerate(ds["basin_fraction"].values))
     if "system" in ds.attrs:  # any System
         fig.suptitle(f"Basins of {ds.attrs['system']} ({ds.attrs.get('system_parameters', '')})\n{fracs}", fontsize=10)

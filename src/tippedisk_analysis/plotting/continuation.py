@@ -15,8 +15,10 @@ UNITS = {"omega": "rad s-1", "eps": "m s-1", "mu": "1", "e": "m", "inertia": "1"
 
 
 def axis_label(name: str, ds: xr.Dataset | None = None) -> str:
-    units = UNITS.get(name) or (ds[name].attrs.get("units", "") if ds is not None and name in ds else "")
-    return labels.axis_label(name, "" if units == "1" and name not in UNITS else units)
+    physical = ds is None or labels.is_tippedisk(ds)
+    known = UNITS.get(name) if physical else None
+    units = known or (ds[name].attrs.get("units", "") if ds is not None and name in ds else "")
+    return labels.axis_label(name, "" if units == "1" and not known else units, physical)
 
 
 def _specials(ds: xr.Dataset):
@@ -52,7 +54,7 @@ def continuation_figure(ds: xr.Dataset, observable: str | None = None, backgroun
     if observable == "max_real_eig":
         ax.axhline(0.0, color="0.6", lw=0.8)
         ax.set_yscale("symlog", linthresh=0.1)
-    ax.set(ylabel=labels.axis_label(observable, ds[observable].attrs.get("units", "")),
+    ax.set(ylabel=labels.axis_label(observable, ds[observable].attrs.get("units", ""), labels.is_tippedisk(ds)),
            title=f"{config_of(ds).get('branch', '')} branch: stable solid, unstable dashed")
     ax2 = axes[1]
     for k in range(ds.sizes["eig"]):

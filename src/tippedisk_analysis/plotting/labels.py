@@ -40,9 +40,16 @@ def unit(units: str) -> str:
     return UNITS.get(units.strip(), units.strip())
 
 
-def axis_label(name: str, units: str = "") -> str:
-    """e.g. axis_label("omega", "rad s-1") -> "spin rate $\\Omega$ [rad/s]"."""
-    text = NAMES.get(name, name.replace("_", " "))
+def is_tippedisk(ds) -> bool:
+    """Whether a dataset is the tippedisk's (physical names, SI) rather than of a user's System, whose names
+    (a parameter mu, a time t) mean whatever the user declared."""
+    return not ds.attrs.get("system") or str(ds.attrs["system"]).startswith(("tippedisk", "rolling"))
+
+
+def axis_label(name: str, units: str = "", physical: bool = True) -> str:
+    """e.g. axis_label("omega", "rad s-1") -> "spin rate $\\Omega$ [rad/s]"; ``physical=False`` (a user's
+    System): the name as declared."""
+    text = NAMES.get(name, name.replace("_", " ")) if physical else name
     return f"{text} [{unit(units)}]" if units else text
 
 

@@ -256,7 +256,8 @@ def run(setup: Setup, initial: InitialState, t_end: float, *, dt_output: float =
     data["E_tot"] = data["E_kin"] + data["E_pot"]
     mode = data.pop("mode").astype(np.int8)
     n_slide = sum(1 for _t, m in switches[1:] if m == "sliding")
-    message += f"; {len(switches) - 1} mode switch(es), {n_slide} to sliding"
+    message += (f"; started {switches[0][1]}, then {len(switches) - 1} mode switch(es) that held longer than "
+                f"round-off, {n_slide} to sliding")
     config = {"model": "hybrid-euler", "setup": to_dict(setup), "initial": to_dict(initial), "t_end": t_end,
               "dt_output": dt_output, "integrator": {"name": "heyoka.taylor_adaptive", "heyoka_version": hy.__version__,
                                                      "tol": tol, "fall_angle": fall_angle,

@@ -1,0 +1,65 @@
+"""The command line on the datasets of any System and on the hybrid model's numerical endings (issue 30)."""
+
+from __future__ import annotations
+
+import matplotlib
+import pytest
+
+import tippedisk_analysis as td
+import zoo
+from tippedisk_analysis import dynamics as dy
+from tippedisk_analysis.cli import main
+from tippedisk_analysis.cli.periodic_orbits import ORBIT_SYSTEMS
+from tippedisk_analysis.plotting import FIGURES
+
+matplotlib.use("Agg")
+
+
+def test_the_system_help_lists_every_catalogue_system_with_a_start(capsys):
+    assert set(ORBIT_SYSTEMS) == {name for name, tb in dy.TEXTBOOK.items() if tb.start}
+    assert main(["periodic-orbits", "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert all(name in text for name in ORBIT_SYSTEMS)
+
+
+def test_from_hopf_of_a_user_system_is_one_line_and_of_a_catalogue_system_a_branch(tmp_path, capsys):
+    s = zoo.bautin()
+    td.save(dy.equilibrium_branch(s, [0.0, 0.0], "mu", bounds=(-1.5, 0.5), pars=s.with_pars(mu=-1.5)),
+            tmp_path / "user.nc")
+    assert main(["periodic-orbits", "--from-hopf", f"{tmp_path / 'user.nc'}:HOPF1", "-o", str(tmp_path / "o.nc")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "bautin_user" in err and "dy.orbit_branch(" in err
+    assert not (tmp_path / "o.nc").exists()
+    ab = dy.textbook_system("ab")
+    td.save(dy.equilibrium_branch(ab, [0.0, 0.0], "D", bounds=(0.0, 0.2)), tmp_path / "ab.nc")
+    assert main(["periodic-orbits", "--from-hopf", f"{tmp_path / 'ab.nc'}:HOPF1", "--to", "0.12",
+                 "-o", str(tmp_path / "ab_po.nc")]) == 0
+    po = td.load(tmp_path / "ab_po.nc")
+    assert po.attrs["status"] == "completed" and float(po.D.min()) == pytest.approx(0.12, abs=1e-12)
+
+
+def test_generic_figures_use_the_declared_names_and_time_units():
+    """A user's parameter mu is no friction coefficient, and a dimensionless time has no seconds."""
+    s = zoo.duffing_vdp()
+    eq = dy.equilibrium_branch(s, [0.0, 0.0], "mu", bounds=(-1.0, 1.0), pars=s.with_pars(mu=-0.5))
+    ba = dy.basins(s.with_defaults(mu=-0.5), dy.Grid(("x", "y"), (-4, -6), (4, 6), (80, 120)),
+                   {"x": (-3.0, 3.0, 6), "y": (-3.0, 3.0, 6)}, horizon=60.0, progress=False)
+    texts = []
+    for ds in (eq, ba):
+        fig = FIGURES[ds.attrs["kind"]](ds)
+        texts += [t for ax in fig.axes for t in (ax.get_xlabel(), ax.get_ylabel())]
+    assert "mu" in texts and not any("friction" in t or "[s]" in t for t in texts)
+    assert "time to assignment [-]" in texts
+
+
+@pytest.mark.parametrize("argv, status, code", [
+    (["--t-end", "1", "--tol", "0.99", "--alpha-dot", "400"], "zeno", 1),  # switches accumulate: numerics
+    (["--t-end", "0.3", "--mu", "0"], "completed", 0),  # slides all run long
+])
+def test_hybrid_endings_and_their_exit_status(tmp_path, capsys, argv, status, code):
+    out = tmp_path / "h1.nc"
+    assert main(["simulate", "--model", "h1", *argv, "-o", str(out)]) == code
+    text = capsys.readouterr().out
+    assert td.load(out).attrs["status"] == status
+    if "--mu" in argv:
+        assert "started sliding, then 0 mode switch(es)" in text
