@@ -14,6 +14,7 @@ cannot encode, or (unless ``overwrite``) an existing file.
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import re
 import secrets
@@ -176,8 +177,16 @@ def atomic_write(path: str | os.PathLike, write: Callable[[Path], None], keep_su
             os.replace(tmp, path)
     except OSError as exc:
         reason = exc.strerror or str(exc) or exc.__class__.__name__
+        if exc.errno == errno.ENOSPC:
+            raise OutputError(f"cannot write '{show(path)}': the disk is full ({reason}); free space or choose "
+                              "another path") from None
         raise OutputError(f"cannot write '{show(path)}' ({reason}); check the disk space and the directory's "
                           "permissions, or choose another path") from None
+    except RuntimeError as exc:  # netCDF-C reports a failed write (e.g. a full disk) as "NetCDF: HDF error"
+        if not str(exc).startswith("NetCDF"):
+            raise
+        raise OutputError(f"cannot write '{show(path)}' ({exc}: the disk may be full); free space or choose "
+                          "another path") from None
     finally:
         try:
             os.unlink(tmp)

@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import importlib
 import pkgutil
+import shutil
 from pathlib import Path
 
-from ..errors import Interrupted, ParameterError
+from ..errors import Interrupted, OutputError, ParameterError
 from ..files import check_output, show
 from .registry import command
 
@@ -54,6 +55,7 @@ def study(args) -> int:
     out = Path(args.output_dir)
     if out.exists() and not out.is_dir():
         raise ParameterError(f"--output-dir '{show(out)}' is a file; give a folder")
+    created = not out.exists()
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
@@ -61,6 +63,10 @@ def study(args) -> int:
     check_output(out / "probe.nc", option="--output-dir")  # writable, before the study starts
     try:
         run(args.name, args.output_dir, quick=args.quick)
+    except OutputError:  # e.g. a full disk: no half-made output folder left behind
+        if created:
+            shutil.rmtree(out, ignore_errors=True)
+        raise
     except KeyboardInterrupt:
         raise Interrupted(f"interrupted; the files the study finished stay in '{show(out)}' (rerun to redo it)") from None
     return 0
