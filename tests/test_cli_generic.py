@@ -63,3 +63,27 @@ def test_hybrid_endings_and_their_exit_status(tmp_path, capsys, argv, status, co
     assert td.load(out).attrs["status"] == status
     if "--mu" in argv:
         assert "started sliding, then 0 mode switch(es)" in text
+
+
+@pytest.mark.parametrize("option", [["--gravity", "1e300"], ["--alpha-dot", "1e150"], ["--mass", "1e-300"],
+                                    ["--mu", "1e300"], ["--beta-dot", "1e10"]])
+def test_hybrid_runs_with_extreme_finite_inputs_end_nonfinite(tmp_path, capsys, option):
+    """Outputs that overflow at once: a dataset that ends at the last finite sample, status nonfinite, exit 1,
+    one line (as the ODE and Moreau models)."""
+    out = tmp_path / "h1.nc"
+    assert main(["simulate", "--model", "h1", "--t-end", "0.1", *option, "-o", str(out)]) == 1
+    ds = td.load(out)
+    assert ds.attrs["status"] == "nonfinite" and "non-finite" in ds.attrs["message"]
+    assert len(capsys.readouterr().err.strip().splitlines()) <= 1
+
+
+def test_hybrid_section_of_an_overflowing_run_is_empty_and_nonfinite(tmp_path):
+    out = tmp_path / "p.nc"
+    assert main(["poincare", "--model", "h1", "--omega", "1e150", "-o", str(out)]) == 1
+    ds = td.load(out)
+    assert ds.attrs["status"] == "nonfinite" and ds.sizes["crossing"] == 0
+
+
+def test_a_hybrid_run_starts_with_its_initial_state(tmp_path):
+    ds = td.simulate("h1", 0.01)
+    assert float(ds.time[0]) == 0.0 and float(ds.gamma[0]) == pytest.approx(-1.4707963267948965, abs=1e-15)

@@ -175,20 +175,25 @@ def integrate(setup: Setup, initial: InitialState, t_end: float, dt_output: floa
         ta = roll if mode == "rolling" else slide
         ta.time, ta.state[:] = t, state
         ta.reset_cooldowns()
-        ahead = grid[grid > t]
-        res = ta.propagate_grid(np.concatenate([[t], ahead]))
-
-        out = np.asarray(res[-1])[1:]
-        seg_time = ahead[: len(out)]
+        times = np.concatenate([[t], grid[grid > t]])
+        res = ta.propagate_grid(times)
+        first = 0 if not segments else 1  # the initial state is the run's first sample; later ones end a segment
+        out = np.asarray(res[-1])[first:]
+        seg_time = times[first:first + len(out)]
         outcome = res[0]
         if outcome == hy.taylor_outcome.time_limit:
             segments.append(Segment(mode, seg_time, out, work))
             break
         event = int(outcome)
-        t, state = float(ta.time), np.array(ta.state)
-        if not np.all(np.isfinite(state)):
-            status, message = "nonfinite", f"the state became non-finite at t = {t:.6g} s; try a smaller --tol"
+        start, t, state = state, float(ta.time), np.array(ta.state)
+        if not (np.all(np.isfinite(state)) and math.isfinite(t)):
+            last = seg_time[-1] if len(seg_time) else times[0]
+            status, message = "nonfinite", (f"the state became non-finite after t = {last:.6g} s (extreme inputs, "
+                                            "or try a smaller --tol)")
+            if not segments and not len(out):  # at the first step: the initial state is the run's one sample
+                seg_time, out = times[:1], np.asarray(start)[None, :]
             segments.append(Segment(mode, seg_time, out, work))
+            t = last
             break
         segments.append(Segment(mode, np.append(seg_time, t), np.vstack([out, state]), work))
         if event in ENDINGS:
@@ -250,6 +255,13 @@ def run(setup: Setup, initial: InitialState, t_end: float, *, dt_output: float =
         for name, values in _segment_data(cm, seg, pars).items():
             columns.setdefault(name, []).append(values)
     data = {name: np.concatenate(parts) for name, parts in columns.items()}
+    finite = np.all([np.isfinite(v) for v in data.values()], axis=0)
+    if not finite.all():  # outputs that overflow (extreme inputs): the dataset ends at the last finite sample
+        keep = int(np.argmin(finite))
+        data = {name: values[:keep] for name, values in data.items()}
+        t_final = float(data["time"][-1]) if keep else 0.0
+        status, message = "nonfinite", (f"the outputs became non-finite after t = {t_final:.6g} s (extreme inputs, "
+                                        "or try a smaller --tol); the dataset ends there")
     time = data.pop("time")
     for angle in ("alpha", "gamma"):
         data[angle] = np.unwrap(data[angle])
@@ -299,10 +311,14 @@ def section_crossings(setup: Setup, initial: InitialState, quantity: str, level:
         if rec.times:
             seg = Segment(mode, np.array(rec.times), np.array(rec.states), math.nan)
             parts.append(_segment_data(cm, seg, pars))
-    data = {name: np.concatenate([p[name] for p in parts]) for name in parts[0]} if parts else {}
-    order = np.argsort(data["time"]) if data else np.array([], int)
+    if not parts:  # no crossing: the columns, empty (their names from the initial state's)
+        first = Segment("rolling", np.zeros(1), rolling.initial_state_vector(initial)[None, :], 0.0)
+        with np.errstate(all="ignore"):
+            parts = [{name: values[:0] for name, values in _segment_data(cm, first, pars).items()}]
+    data = {name: np.concatenate([p[name] for p in parts]) for name in parts[0]}
+    order = np.argsort(data["time"])
     data = {name: values[order] for name, values in data.items()}
-    time, mode = data.pop("time", np.array([])), data.pop("mode", np.array([], np.int8))
+    time, mode = data.pop("time"), data.pop("mode")
     data.pop("W_friction", None)  # the work is not integrated through the sliding recorder's states alone
     return {"time": time, "mode": mode.astype(np.int8), "data": data, "status": status, "message": message,
             "t_final": t_final, "switches": switches}
