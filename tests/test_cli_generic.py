@@ -87,3 +87,26 @@ def test_hybrid_section_of_an_overflowing_run_is_empty_and_nonfinite(tmp_path):
 def test_a_hybrid_run_starts_with_its_initial_state(tmp_path):
     ds = td.simulate("h1", 0.01)
     assert float(ds.time[0]) == 0.0 and float(ds.gamma[0]) == pytest.approx(-1.4707963267948965, abs=1e-15)
+
+
+@pytest.mark.parametrize("argv", [
+    ["periodic-orbits", "--frictionless", "inverted:nan"],
+    ["periodic-orbits", "--frictionless", "inverted:inf"],
+    ["periodic-orbits", "--frictionless", "inverted:1e300"],
+    ["simulate", "--tol", "1e-300"],
+    ["simulate", "--model", "m1", "--tol", "0"],
+    ["poincare", "--tol", "1"],
+])
+def test_absurd_inputs_are_one_line_and_exit_2(tmp_path, capsys, argv):
+    out = tmp_path / "out.nc"
+    assert main([*argv, "-o", str(out)]) == 2
+    assert len(capsys.readouterr().err.strip().splitlines()) == 1 and not out.exists()
+
+
+def test_a_dataset_whose_config_is_not_json_is_refused_in_one_line(tmp_path, capsys):
+    ds = td.simulate("ode1", 0.01)
+    ds.attrs["config"] = "not json {"
+    ds.to_netcdf(tmp_path / "bad.nc")
+    assert main(["periodic-orbits", "--from-run", str(tmp_path / "bad.nc"), "-o", str(tmp_path / "o.nc")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "not JSON" in err[0]

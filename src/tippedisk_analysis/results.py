@@ -156,8 +156,15 @@ def require_samples(ds: xr.Dataset, what: str = "draw") -> None:
 
 
 def config_of(ds: xr.Dataset) -> dict:
-    """The configuration stored in a dataset."""
-    return json.loads(ds.attrs["config"])
+    """The configuration stored in a dataset (DatasetError if it has none that reads as a JSON object)."""
+    try:
+        config = json.loads(ds.attrs["config"])
+    except (KeyError, TypeError, ValueError):
+        config = None
+    if not isinstance(config, dict):
+        raise DatasetError("the dataset's attribute 'config' is missing or not JSON: it is damaged or not one of "
+                           "ours; give a file written by tippedisk")
+    return config
 
 
 LABEL_DIMENSIONS = "label_dimensions"

@@ -16,7 +16,7 @@ from ..errors import ParameterError
 from ..files import show
 from ..ranges import parse_range
 from .common import add_disk, add_output, disk_from_args, finite_float, output_path, positive_int, scheduler_type, \
-    undecided_hint
+    tolerance, undecided_hint
 from .registry import command
 
 INITIAL_HELP = {"omega": "initial spin Omega [rad/s] (Table 3: 40)", "beta0": "initial beta [rad] (pi/2)",
@@ -32,7 +32,7 @@ def _common(p) -> None:
                    "(--disk geometry)")
     p.add_argument("--t-end", type=finite_float, default=60.0, help="maximum horizon of each run [s] (default 60)")
     p.add_argument("--dt", type=finite_float, help="sampling interval of the recurrence grid [s] (default 0.05)")
-    p.add_argument("--tol", type=finite_float, default=defaults.MAP_TOL,
+    p.add_argument("--tol", type=tolerance, default=defaults.MAP_TOL,
                    help=f"integrator tolerance (default {defaults.MAP_TOL:g})")
     p.add_argument("--fall-angle", type=finite_float, default=defaults.FALL_ANGLE,
                    help=f"tilt that ends a run [rad] (default {defaults.FALL_ANGLE:g})")

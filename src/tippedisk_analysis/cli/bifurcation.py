@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from .. import defaults
 from ..files import show
-from .common import add_disk, add_initial_and_friction, add_output, finite_float, output_path, positive_int, \
-    range_type, scheduler_type, setup_and_initial
+from .common import add_disk, add_initial_and_friction, add_output, output_path, positive_int, \
+    range_type, scheduler_type, setup_and_initial, tolerance
 from .poincare import add_section
 from .registry import command
 
@@ -19,7 +19,7 @@ def _arguments(p) -> None:
                    help="quantity recorded at the crossings (default gamma; angles wrapped into (-pi, pi]); one of "
                         + ", ".join(quantities()))
     add_initial_and_friction(p, omega=False)
-    p.add_argument("--tol", type=finite_float, default=defaults.BIFURCATION_TOL,
+    p.add_argument("--tol", type=tolerance, default=defaults.BIFURCATION_TOL,
                    help=f"integrator tolerance (default {defaults.BIFURCATION_TOL:g})")
     add_section(p, t_end=10.0, t_transient=5.0, max_crossings=50)
     p.add_argument("--threads", type=positive_int, help="threads without --scheduler (default: cores)")

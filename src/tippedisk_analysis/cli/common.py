@@ -24,6 +24,18 @@ def finite_float(text: str) -> float:
     return value
 
 
+MIN_TOL = 1e-16  # below double precision's round-off a tolerance means nothing (and heyoka's order explodes)
+
+
+def tolerance(text: str) -> float:
+    """An integrator or solver tolerance in [MIN_TOL, 1)."""
+    value = finite_float(text)
+    if not MIN_TOL <= value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a tolerance in [{MIN_TOL:g}, 1) (double precision "
+                                         "resolves no less); give e.g. 1e-13")
+    return value
+
+
 def positive_int(text: str) -> int:
     try:
         value = int(text)

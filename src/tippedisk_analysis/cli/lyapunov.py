@@ -8,7 +8,7 @@ from .. import defaults
 from ..errors import ParameterError
 from ..files import show
 from .common import add_disk, add_output, disk_from_args, disk_options_given, finite_float, output_path, \
-    positive_int, range_type, scheduler_type
+    positive_int, range_type, scheduler_type, tolerance
 from .registry import command
 
 
@@ -24,7 +24,7 @@ def _arguments(p) -> None:
     p.add_argument("--transient", type=finite_float, default=0.0, help="not accumulated at the start (default 0)")
     p.add_argument("--n-exponents", type=positive_int, help="exponents of a run (default all 7)")
     p.add_argument("--system", help="a textbook system instead of the tippedisk: lorenz")
-    p.add_argument("--tol", type=finite_float, help=f"integrator tolerance (default 1e-12; maps {defaults.MAP_TOL:g})")
+    p.add_argument("--tol", type=tolerance, help=f"integrator tolerance (default 1e-12; maps {defaults.MAP_TOL:g})")
     p.add_argument("--chunk-size", type=positive_int, default=128, help="map points per stored chunk (default 128)")
     p.add_argument("--batch-size", type=positive_int, default=defaults.BATCH_SIZE, help="SIMD lanes (default 4)")
     p.add_argument("--threads", type=positive_int, help="threads without --scheduler (default: cores)")

@@ -8,7 +8,7 @@ from __future__ import annotations
 from .. import defaults
 from ..files import show
 from .common import add_disk, add_output, disk_from_args, finite_float, output_path, positive_int, range_type, \
-    scheduler_type, undecided_hint
+    scheduler_type, tolerance, undecided_hint
 from .registry import command
 
 
@@ -30,7 +30,7 @@ def _arguments(p) -> None:
                    f"(default {defaults.OUTCOME_WINDOW_FRACTION:g} t_end)")
     p.add_argument("--dt", type=finite_float, help="attractors: sampling interval of the recurrence grid [s] "
                                                    "(default 0.05)")
-    p.add_argument("--tol", type=finite_float, default=defaults.MAP_TOL,
+    p.add_argument("--tol", type=tolerance, default=defaults.MAP_TOL,
                    help=f"integrator tolerance (default {defaults.MAP_TOL:g})")
     p.add_argument("--fall-angle", type=finite_float, default=defaults.FALL_ANGLE,
                    help=f"tilt that ends a run [rad] (default {defaults.FALL_ANGLE:g})")

@@ -10,6 +10,8 @@ the trial period); 1 a numerical failure (non-finite flow, a branch ended by the
 
 from __future__ import annotations
 
+import math
+
 from ..errors import ParameterError
 from ..files import show
 from .common import add_disk, add_output, disk_from_args, disk_options_given, finite_float, output_path, positive_int
@@ -116,6 +118,8 @@ def periodic_orbits(args) -> int:
 
 
 def _frictionless(args):
+    import numpy as np
+
     from ..analysis import orbits
     from ..dynamics import continuation
     from ..parameters import Friction, Setup, to_dict
@@ -126,12 +130,20 @@ def _frictionless(args):
     except ValueError:
         raise ParameterError(f"--frictionless {args.frictionless!r} is not BRANCH:OMEGA; "
                              "give e.g. inverted:40") from None
+    if not math.isfinite(omega):
+        raise ParameterError(f"--frictionless {args.frictionless!r}: the spin rate must be finite; give e.g. "
+                             "inverted:40")
     setup = Setup(disk=disk_from_args(args), friction=Friction(mu=0.0))
     radius = 1e-3 if args.hopf_radius is None else args.hopf_radius
     if not radius > 0:
         raise ParameterError(f"--hopf-radius {radius:g} must be positive")
     options = continuation.Options(ds=0.02, ds_max=0.1, max_points=args.max_points)
-    br, prob = orbits.tippedisk_lyapunov_family(setup, branch, omega, args.to, radius=radius, options=options)
+    try:
+        br, prob = orbits.tippedisk_lyapunov_family(setup, branch, omega, args.to, radius=radius, options=options)
+    except np.linalg.LinAlgError:
+        raise ParameterError(f"--frictionless {args.frictionless!r}: the linearisation at that spin is not finite "
+                             "(beyond what the model can evaluate); give a spin rate of physical size, e.g. "
+                             "inverted:40") from None
     return orbits.tippedisk_branch_dataset(prob, br, {"source": "frictionless", "branch": branch, "omega": omega,
                                                       "setup": to_dict(setup)})
 

@@ -6,7 +6,7 @@ from .. import defaults
 from ..files import show
 from ..resources import check_memory
 from .common import add_disk, add_initial_and_friction, add_output, finite_float, output_path, positive_int, \
-    setup_and_initial
+    setup_and_initial, tolerance
 from .registry import command
 
 DIRECTIONS = ("positive", "negative", "any")
@@ -31,7 +31,7 @@ def _arguments(p) -> None:
     add_initial_and_friction(p)
     p.add_argument("--model", default="ode-euler", help="ode-euler (ode1), ode-quaternion (ode2) or hybrid-euler (h1: set-valued "
                    "Coulomb, rolling and sliding)")
-    p.add_argument("--tol", type=finite_float, default=defaults.TAYLOR_TOL,
+    p.add_argument("--tol", type=tolerance, default=defaults.TAYLOR_TOL,
                    help=f"integrator tolerance (default {defaults.TAYLOR_TOL:g})")
     add_section(p, t_end=10.0, t_transient=0.0, max_crossings=None)
     add_output(p)

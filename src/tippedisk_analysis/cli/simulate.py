@@ -8,7 +8,7 @@ import dataclasses
 
 from .. import defaults
 from ..files import remove_stale_parts, show
-from .common import add_disk, add_output, disk_from_args, finite_float, output_path, positive_int
+from .common import add_disk, add_output, disk_from_args, finite_float, output_path, positive_int, tolerance
 from .registry import command
 
 INITIAL = (  # option, InitialState field, help
@@ -31,7 +31,7 @@ def _arguments(p) -> None:
     p.add_argument("--t-end", type=finite_float, default=5.0, help="end time [s] (default 5)")
     add_output(p)
     p.add_argument("--dt-output", type=finite_float, help="output sampling of ODE models [s] (default 1e-3)")
-    p.add_argument("--tol", type=finite_float, help=f"tolerance: heyoka {defaults.TAYLOR_TOL:g} (ODE), prox stopping "
+    p.add_argument("--tol", type=tolerance, help=f"tolerance: heyoka {defaults.TAYLOR_TOL:g} (ODE), prox stopping "
                                                     f"{defaults.MOREAU_TOL:g} (Moreau)")
     p.add_argument("--fall-angle", type=finite_float,
                    help=f"tilt above the table [rad] that ends a run (default {defaults.FALL_ANGLE:g}; quaternion "

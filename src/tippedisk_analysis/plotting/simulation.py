@@ -177,7 +177,7 @@ def disk_of(ds: xr.Dataset) -> dict | None:
     """The disk parameters stored in a dataset's configuration, or None."""
     try:
         return config_of(ds)["setup"]["disk"]
-    except (KeyError, ValueError):
+    except (KeyError, DatasetError):
         return None
 
 

@@ -97,8 +97,9 @@ def simulate(model: str = "ode-euler", t_end: float = 5.0, *, setup: Setup | Non
         raise ParameterError(f"model {info.name!r} takes no option(s) {sorted(unknown)}; "
                              f"it takes {sorted(info.options)}")
     _check_positive(options, ("dt_output", "tol", "slip_smoothing", "dt"))
-    if "tol" in options and not options["tol"] < 1:
-        raise ParameterError(f"tol = {options['tol']!r} must lie in (0, 1); give e.g. 1e-13 (ODE) or 1e-8 (Moreau)")
+    if "tol" in options and not 1e-16 <= options["tol"] < 1:
+        raise ParameterError(f"tol = {options['tol']!r} must lie in [1e-16, 1) (double precision resolves no less); "
+                             "give e.g. 1e-13 (ODE) or 1e-8 (Moreau)")
     _check_memory(info, float(t_end), options)
     return info.run(setup, initial, float(t_end), **options)
 
