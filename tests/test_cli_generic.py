@@ -110,3 +110,13 @@ def test_a_dataset_whose_config_is_not_json_is_refused_in_one_line(tmp_path, cap
     assert main(["periodic-orbits", "--from-run", str(tmp_path / "bad.nc"), "-o", str(tmp_path / "o.nc")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "not JSON" in err[0]
+
+
+def test_a_moreau_run_takes_every_whole_step_to_t_end():
+    """600 s / 1e-5 s is 59999999.99999999 in floating point: the run took one step too few and ended at
+    599.99999 s. The step count is the integer ratio to round-off."""
+    from tippedisk_analysis.solvers.moreau.driver import whole_steps
+
+    assert whole_steps(600.0, 1e-5) == 60_000_000 and whole_steps(0.35, 0.1) == 3
+    ds = td.simulate("m1", 0.003, dt=1e-5)
+    assert float(ds.time[-1]) == pytest.approx(0.003, abs=1e-15)

@@ -82,6 +82,14 @@ def _validate_torque_share(model, share) -> float:
     return float(share)
 
 
+def whole_steps(t_end: float, dt: float) -> int:
+    """The number of steps dt in t_end, t_end / dt rounded down unless it is an integer to round-off (relative:
+    600 / 1e-5 is 59999999.99999999 in floating point, and an absolute 1e-9 does not reach 6e7)."""
+    ratio = t_end / dt
+    nearest = round(ratio)
+    return int(nearest) if abs(ratio - nearest) <= 1e-9 * max(1.0, ratio) else int(math.floor(ratio))
+
+
 def _validate(model, dt, tol, store_every, max_iter, gains, fall_angle, t_end):
     for name, value in (("dt", dt), ("tol", tol), *gains.items()):
         if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
@@ -140,7 +148,7 @@ def integrate(model: MoreauModel, setup: Setup, initial: InitialState, t_end: fl
         fall_angle = default_fall_angle(model)
     gains = {"r_N": r_N, "r_T": r_T, "r_tau": r_tau, "r_R": r_R}
     _validate(model, dt, tol, store_every, max_iter, gains, fall_angle, t_end)
-    n_total = int(math.floor(t_end / dt + 1e-9))
+    n_total = whole_steps(t_end, dt)
     if n_total < 1:
         raise ParameterError(f"t_end = {t_end} s is shorter than one step dt = {dt} s; give t_end >= dt")
     par, flags = parameter_vectors(model, setup, dt=dt, tol=tol, max_iter=max_iter,
