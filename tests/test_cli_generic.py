@@ -120,3 +120,31 @@ def test_a_moreau_run_takes_every_whole_step_to_t_end():
     assert whole_steps(600.0, 1e-5) == 60_000_000 and whole_steps(0.35, 0.1) == 3
     ds = td.simulate("m1", 0.003, dt=1e-5)
     assert float(ds.time[-1]) == pytest.approx(0.003, abs=1e-15)
+
+
+def test_a_dataset_too_large_for_memory_is_named_as_such(tmp_path):
+    """A file of ours whose variable has 4e9 values (32 GB, stored sparse): refused as too large to load, not
+    as 'not a netCDF dataset (MemoryError)'."""
+    import netCDF4
+
+    path = tmp_path / "huge.nc"
+    with netCDF4.Dataset(path, "w") as nc:
+        nc.setncatts({"producer": "tippedisk_analysis", "kind": "simulation"})
+        nc.createDimension("time", 4_000_000_000)
+        nc.createVariable("gamma", "f8", ("time",), chunksizes=(1_000_000,))
+    with pytest.raises(td.TippediskError, match="needs about .* of memory"):
+        td.load(path)
+
+
+def test_messages_name_the_real_cause(tmp_path, capsys):
+    """An eccentricity the inertia cannot take is named as such (not 'B_S not positive'); --from-run on a run
+    that lifted off says it lifted off (not 'give a longer run')."""
+    assert main(["simulate", "--e", "0.04", "-o", str(tmp_path / "e.nc")]) == 2
+    assert "eccentricity e = 0.04 m is too large" in capsys.readouterr().err
+    run = tmp_path / "lo.nc"
+    assert main(["simulate", "--model", "h1", "--t-end", "1", "--alpha-dot", "400", "-o", str(run)]) == 0
+    assert td.load(run).attrs["status"] == "lift_off"
+    capsys.readouterr()
+    assert main(["periodic-orbits", "--from-run", str(run), "-o", str(tmp_path / "o.nc")]) == 2
+    err = capsys.readouterr().err
+    assert "ended 'lift_off'" in err and "longer run" not in err

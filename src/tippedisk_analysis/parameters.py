@@ -125,12 +125,15 @@ class Disk:
             self.e < self.r,
             f"eccentricity e = {self.e} m is not smaller than the radius r = {self.r} m; give 0 <= e < r",
         )
+        about_G = {"A_S": self.A, "B_S": self.B, "C_S": self.C}
         for name, value in self.inertia_S.items():
-            _require(
-                value > 0,
-                f"inertia about the centre of gravity {name} = {value:.3g} kg m^2 is not positive; "
-                "check A, B, C (about G) against m e^2",
-            )
+            if value <= 0 and about_G[name] > 0:  # Steiner: X_S = X - m e^2 (Table 2 is about G)
+                e_max = math.sqrt(about_G[name] / self.m)
+                _require(False, f"eccentricity e = {self.e} m is too large for this disk's inertia: {name} = "
+                                f"{name[0]} - m e^2 = {value:.3g} kg m^2 would not be positive; give e < {e_max:.4g} m "
+                                f"(or a larger {name[0]})")
+            _require(value > 0, f"inertia about the centre of gravity {name} = {value:.3g} kg m^2 is not positive; "
+                                "check A, B, C (about G) against m e^2")
         A, B, C = self.inertia_S.values()
         _require(
             A + B >= C * (1 - 1e-12) and A + C >= B and B + C >= A,

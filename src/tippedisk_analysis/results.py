@@ -35,7 +35,7 @@ import numpy as np
 import xarray as xr
 
 from . import files
-from .errors import DatasetError
+from .errors import DatasetError, TippediskError
 from .version import __version__
 
 PRODUCER = "tippedisk_analysis"
@@ -260,12 +260,18 @@ def load(path: str | os.PathLike) -> xr.Dataset:
         raise DatasetError(f"'{shown}' does not exist; give the path of a .nc file written by tippedisk")
     if not files.utf8_encodable(path):
         raise DatasetError(f"'{shown}' is not a valid UTF-8 file name, which netCDF cannot open; rename the file")
+    from .resources import check_memory
+
     try:
         with files.deferred_interrupt(), xr.open_dataset(path, engine="netcdf4") as ds:
+            if ds.attrs.get("producer") != PRODUCER or "kind" not in ds.attrs:
+                raise DatasetError(f"'{shown}' was not written by tippedisk_analysis; give a .nc file written by "
+                                   "tippedisk")
+            check_memory(ds.nbytes, f"loading '{shown}'", "load a part of it with xarray.open_dataset(...).isel(...)")
             ds = ds.load()
+    except TippediskError:
+        raise
     except Exception as exc:  # netCDF4 raises OSError / ValueError for foreign files
         raise DatasetError(f"'{shown}' is not a netCDF dataset ({exc.__class__.__name__}); "
                            "give a .nc file written by tippedisk") from None
-    if ds.attrs.get("producer") != PRODUCER or "kind" not in ds.attrs:
-        raise DatasetError(f"'{shown}' was not written by tippedisk_analysis; give a .nc file written by tippedisk")
     return decode(ds)

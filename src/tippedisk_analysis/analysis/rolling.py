@@ -273,6 +273,9 @@ def orbits_from_run(run: xr.Dataset, *, returns_time: float = RETURNS_TIME) -> x
     from ..dynamics.orbit_datasets import orbits_dataset
     from ..results import config_of, index_coordinate
 
+    if run.attrs.get("status") != "completed":
+        raise ParameterError(f"the run ended {run.attrs.get('status')!r} ({run.attrs.get('message', '')}), so there is "
+                             "no rolling motion at its end to analyse; give a run that reached its t_end")
     x, pars, t_run = rolling_start(run)
     sec = section(x, t_end=returns_time, pars=pars)
     motion = identify(sec)
