@@ -148,3 +148,15 @@ def test_messages_name_the_real_cause(tmp_path, capsys):
     assert main(["periodic-orbits", "--from-run", str(run), "-o", str(tmp_path / "o.nc")]) == 2
     err = capsys.readouterr().err
     assert "ended 'lift_off'" in err and "longer run" not in err
+
+
+def test_after_its_result_the_command_ignores_ctrl_c():
+    """Ctrl-C in the last moments, after the result line, hit the interpreter's shutdown (dask's atexit) with a
+    traceback: the finished command ignores SIGINT from then on (observed on the process, not timed)."""
+    import subprocess
+    import sys
+
+    code = ("import signal, sys; sys.argv = ['tippedisk', 'study', '--list']; from tippedisk_analysis.cli import main; "
+            "status = main(); print(status, signal.getsignal(signal.SIGINT) == signal.SIG_IGN)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.stdout.strip().splitlines()[-1] == "0 True"

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import signal
 import sys
 import warnings
 
@@ -53,6 +54,13 @@ def _one_line_warnings(command: str):
 
 
 def main(argv: list[str] | None = None) -> int:
+    code = _run(argv)
+    if argv is None:  # the real command: its result is written and said; Ctrl-C while the interpreter shuts down
+        signal.signal(signal.SIGINT, signal.SIG_IGN)  # (atexit handlers, e.g. dask's client) would print a traceback
+    return code
+
+
+def _run(argv: list[str] | None) -> int:
     for stream in (sys.stdout, sys.stderr):  # file names with bytes that are not UTF-8 print as \xNN
         if hasattr(stream, "reconfigure"):
             stream.reconfigure(errors="backslashreplace")
