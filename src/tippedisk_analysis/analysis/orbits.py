@@ -45,17 +45,31 @@ def tippedisk_system(setup: Setup | None = None) -> System:
     return reduced.system(frictionless=conservative).with_defaults(pars)
 
 
-def _energy_change(orbit: PeriodicOrbit) -> float:
-    """E(x(T)) - E(x_0) along the (trial) orbit [J]: zero on a periodic orbit."""
+def _energy_change(orbit: PeriodicOrbit) -> float | None:
+    """E(x(T)) - E(x_0) along the (trial) orbit [J]: zero on a periodic orbit; None where the flow fails."""
     if orbit.status == "nonfinite":
-        return 0.0
+        return None
     flow = Flow(orbit.system)
     try:
         end = flow.advance(orbit.states[0], orbit.period, orbit.pars)
     except FlowError:
-        return 0.0
+        return None
     e = flow.observables(np.column_stack([orbit.states[0], end]), orbit.pars)[1]
     return float(e[1] - e[0])
+
+
+def _energy_columns(orbits: list[PeriodicOrbit]) -> dict:
+    """``energy_change`` of each orbit and ``energy_change_computed``: 0 where the flow failed over the period
+    (the value there is a fill, not the 0 of a periodic orbit)."""
+    changes = [_energy_change(orbit) for orbit in orbits]
+    return {
+        "energy_change": ("point", np.array([0.0 if c is None else c for c in changes]),
+                          {"units": "J", "long_name": "E(x(T)) - E(x_0) over the period of the last iterate (0 on a "
+                                                      "periodic orbit; a fill where energy_change_computed = 0)"}),
+        "energy_change_computed": ("point", np.array([c is not None for c in changes], dtype=np.int8),
+                                   {"long_name": "whether the flow over the period could be computed",
+                                    "flag_values": np.array([0, 1], np.int8), "flag_meanings": "no yes"}),
+    }
 
 
 def _tippedisk_summary(orbits: list[PeriodicOrbit], what: str) -> tuple[str, str]:
@@ -94,19 +108,16 @@ def tippedisk_orbits_from_hopf(ds: xr.Dataset, label: str, amplitudes=(1e-3, 1e-
     vals, vecs = np.linalg.eig(J / scale[:, None] * scale[None, :])  # in scaled states
     k = np.argmin(np.where(vals.imag > 1e-9, np.abs(vals.real), np.inf))
     omega, q = float(vals[k].imag), vecs[:, k] / np.linalg.norm(vecs[:, k])
-    orbits, energy = [], []
+    orbits = []
     for r in amplitudes:
         guess = x_h + 2 * (r * q).real * scale
-        orbit = find_orbit(system, guess, 2 * math.pi / omega, pars, max_iter=max_iter)
-        orbits.append(orbit)
-        energy.append(_energy_change(orbit))
+        orbits.append(find_orbit(system, guess, 2 * math.pi / omega, pars, max_iter=max_iter))
     status, message = _tippedisk_summary(orbits, f"from {label} (Omega = {values['omega']:.8g} rad/s, frequency "
                                                   f"{omega:.6g} rad/s)")
     extra = {
         "guess_amplitude": ("point", np.asarray(amplitudes, float),
                             {"units": "1", "long_name": "r of the guess x_H + 2 r Re(q) (q unit in scaled states)"}),
-        "energy_change": ("point", np.array(energy), {"units": "J", "long_name": "E(x(T)) - E(x_0) over the period "
-                                                      "of the last iterate (0 on a periodic orbit)"}),
+        **_energy_columns(orbits),
     }
     cfg = {"source": "hopf", "source_label": label, "source_values": values, "setup": to_dict(setup),
            "amplitudes": list(map(float, amplitudes)), "hopf_frequency": omega, "hopf_state": x_h.tolist()}
@@ -185,8 +196,7 @@ def tippedisk_orbits_from_run(run: xr.Dataset, *, crossing: int = -2, section: s
                             {"units": "1", "long_name": "|x_(k+1) - x_k| / state_scale between successive returns "
                                                         "(gamma modulo 2 pi)"}),
         "return_state": (("crossing", "state"), X, {"long_name": "reduced state at the crossing"}),
-        "energy_change": ("point", np.array([_energy_change(orbit)]),
-                          {"units": "J", "long_name": "E(x(T)) - E(x_0) over the period of the last iterate"}),
+        **_energy_columns([orbit]),
     }
     cfg = {"source": "run", "run_config": config, "section": section, "crossing": int(k),
            "setup": to_dict(setup), "model_used": "ode-euler"}

@@ -198,12 +198,15 @@ def central_orbit(sec: xr.Dataset, *, pars=None, motion: Motion | None = None) -
     return dy.find_orbit(reduced_system(), guess, motion.mean_return, pars, pinned=("omega_x",))
 
 
+NO_ANGLE = -1.0  # the Floquet angle of an orbit whose multipliers are off the unit circle (0 is a resonance)
+
+
 def floquet_angle(orbit: dy.PeriodicOrbit) -> float:
-    """theta / 2 pi of the nontrivial multipliers e^(+-i theta) of an elliptic orbit, in (0, 1/2]; nan when
+    """theta / 2 pi of the nontrivial multipliers e^(+-i theta) of an elliptic orbit, in (0, 1/2]; NO_ANGLE when
     they are not on the unit circle."""
     mu = orbit.multipliers[~orbit.trivial]
     if len(mu) != 2 or np.max(np.abs(np.abs(mu) - 1.0)) > 1e-6:
-        return math.nan
+        return NO_ANGLE
     return float(abs(np.angle(mu[0])) / (2 * math.pi))
 
 
@@ -310,9 +313,11 @@ def orbits_from_run(run: xr.Dataset, *, returns_time: float = RETURNS_TIME) -> x
         "motion_min_cone_margin_time": ((), along["time"], {"units": "s", "long_name": "when (from the run's end)"}),
         "motion_min_lambda_N": ((), along["min_lambda_N"], {"units": "N", "long_name": "smallest normal force "
                                                                                        "along the motion"}),
-        "orbit_min_cone_margin": ("point", np.array([c.get("min_cone_margin", 0.0)]),
-                                  {"units": "N", "long_name": "smallest mu lambda_N - |lambda_T| along the orbit"}),
     }
+    if c:  # a failed orbit has no cone margin (status no_orbit): the variable is left out, never filled with 0
+        extra["orbit_min_cone_margin"] = ("point", np.array([c["min_cone_margin"]]),
+                                          {"units": "N", "long_name": "smallest mu lambda_N - |lambda_T| along the "
+                                                                      "orbit"})
     cfg = {"source": "rolling run", "run_config": config_of(run), "t_run": t_run, "returns_time": returns_time,
            "motion": motion.kind, "rotation_estimates": list(motion.rotation_estimates),
            "curve_residual": motion.curve_residual}
@@ -347,10 +352,10 @@ def family(orbit: dy.PeriodicOrbit, parameter: str, bounds: tuple, *, max_points
                                                                 "(< 0: rolling needs more friction than the cone)"}),
                 "min_lambda_N": ("point", np.array([x["min_lambda_N"] for x in c]),
                                  {"units": "N", "long_name": "smallest normal force along the orbit (< 0: lift-off)"}),
-                "floquet_angle": ("point", np.nan_to_num(np.array([floquet_angle(o) for o in orbits])),
+                "floquet_angle": ("point", np.array([floquet_angle(o) for o in orbits]),
                                   {"units": "1", "long_name": "theta / 2 pi of the elliptic multipliers e^(+-i theta)",
-                                   "comment": "0 where the nontrivial multipliers are off the unit circle (the "
-                                              "orbit is unstable: see stability)"})}
+                                   "comment": f"{NO_ANGLE:g} (outside (0, 1/2]) where the nontrivial multipliers are "
+                                              "off the unit circle: the orbit is unstable (see stability), no angle"})}
 
     return branch_dataset(prob, br, {"family": parameter, "pinned": ["omega_x"]}, n_samples, extra=margins)
 

@@ -246,8 +246,9 @@ def _read_chunk(path: Path, start: int, stop: int, variables, cfg_hash: str) -> 
     """The results stored in ``path``; None (with a warning) if it is damaged or belongs elsewhere."""
     try:
         with files.deferred_interrupt(), xr.open_dataset(path, engine="netcdf4") as ds:
-            stored_hash = ds.attrs.get("config_hash", cfg_hash)
-            if int(ds.attrs["start"]) != start or int(ds.attrs["stop"]) != stop or stored_hash != cfg_hash:
+            if "config_hash" not in ds.attrs:  # no fingerprint: nothing shows it belongs to this sweep
+                reason = "carries no configuration fingerprint (config_hash)"
+            elif (int(ds.attrs["start"]), int(ds.attrs["stop"]), ds.attrs["config_hash"]) != (start, stop, cfg_hash):
                 reason = "belongs to another configuration or chunk size"
             else:
                 return {k: ds[k].values.copy() for k in variables}

@@ -51,8 +51,11 @@ def run(model_name: str, setup: Setup, initial: InitialState, t_end: float, **op
     ds["contact"].attrs.update(long_name="candidate contact point C_i", units="1")
     if model.parameterization == QUATERNION:
         for name in ("alpha_dot", "beta_dot", "gamma_dot"):
-            ds[name].attrs["comment"] = ("set to 0 where the disk is horizontal (sin beta = 0): "
-                                         "Euler rates are undefined there")
+            ds[name].attrs["comment"] = ("a fill of 0 where euler_rates_defined = 0 (the disk horizontal, sin beta "
+                                         "= 0: Euler rates are undefined there)")
+        ds["euler_rates_defined"] = ds["euler_rates_defined"].astype(np.int8)
+        ds["euler_rates_defined"].attrs.update(long_name="whether the Euler rates are defined (sin beta != 0)",
+                                               flag_values=np.array([0, 1], np.int8), flag_meanings="no yes")
     return describe(ds)
 
 
@@ -77,7 +80,9 @@ def outputs(model: MoreauModel, setup: Setup, rows: np.ndarray, dt: float) -> di
         omega = u[:, 3:6]
         with np.errstate(divide="ignore", invalid="ignore"):
             rates = kin.euler_rates_from_omega(euler[1], euler[2], omega)
-        rates = np.where(np.isfinite(rates), rates, 0.0)  # horizontal disk: rates undefined, stored as 0
+        defined = np.all(np.isfinite(rates), axis=1)  # a horizontal disk (sin beta = 0) has no Euler rates
+        data["euler_rates_defined"] = defined.astype(np.int8)
+        rates = np.where(defined[:, None], rates, 0.0)  # a fill, flagged by euler_rates_defined
     for k, name in enumerate(("alpha", "beta", "gamma")):
         data[name] = euler[k]
         data[name + "_dot"] = rates[:, k]
