@@ -24,6 +24,7 @@ import pytest
 import xarray as xr
 
 import tippedisk_analysis as td
+from tippedisk_analysis.files import HOLD_VARIABLE
 
 SRC = str(Path(__file__).resolve().parents[1] / "src")
 ENV = {**os.environ, "PYTHONPATH": SRC + os.pathsep + os.environ.get("PYTHONPATH", "")}
@@ -220,8 +221,9 @@ def _as_from_a_terminal():
 class _Running:
     """A command started in the background whose stderr is collected as it arrives."""
 
-    def __init__(self, args, cwd, runner=CLI):
-        self.proc = subprocess.Popen([*runner, *args], cwd=cwd, env=ENV, stdout=subprocess.PIPE,
+    def __init__(self, args, cwd, runner=CLI, hold_after: str | None = None):
+        env = {**ENV, HOLD_VARIABLE: hold_after} if hold_after else ENV
+        self.proc = subprocess.Popen([*runner, *args], cwd=cwd, env=env, stdout=subprocess.PIPE,
                                      stderr=subprocess.PIPE, preexec_fn=_as_from_a_terminal)
         self._err = bytearray()
         self._reader = threading.Thread(target=self._read, daemon=True)
@@ -236,13 +238,15 @@ class _Running:
         return bytes(self._err).decode("utf-8", "backslashreplace")
 
 
-def _interrupt(args, cwd, when, runner=CLI):
+def _interrupt(args, cwd, when, runner=CLI, hold_after: str | None = None):
     """Start the command, wait for the event ``when(run)`` (a chunk file, a checkpoint, a progress line on
     ``run.stderr``), send SIGINT as Ctrl-C does, return (status, stderr).
 
     The trigger is an event the command produces, never elapsed time, so a cold heyoka cache or a loaded
-    machine only makes the test wait longer. SAFETY_TIMEOUT only ends a run that hangs."""
-    run = _Running(args, cwd, runner)
+    machine only makes the test wait longer; ``hold_after`` ("chunk", "checkpoint") makes the command wait
+    after that event until the signal (files.hold_for_interrupt), so a run that would finish milliseconds
+    later cannot outrun the test. SAFETY_TIMEOUT only ends a run that hangs."""
+    run = _Running(args, cwd, runner, hold_after)
     deadline = time.monotonic() + SAFETY_TIMEOUT
     while run.proc.poll() is None and not when(run):
         assert time.monotonic() < deadline, f"no trigger event within {SAFETY_TIMEOUT} s: {run.stderr}"
@@ -290,9 +294,9 @@ def test_sigint_before_the_first_chunk_leaves_nothing_that_blocks_other_settings
 def test_sigint_mid_bifurcation_resumes(tmp_path):
     args = ["bifurcation", "--omega", "20:80:64", "--t-end", "6", "--t-transient", "4", "-o", "b.nc"]
     chunks = tmp_path / "b.nc.chunks"
-    code, err = _interrupt(args, tmp_path, lambda run: any(chunks.glob("chunk_*.nc")))
+    code, err = _interrupt(args, tmp_path, lambda run: any(chunks.glob("chunk_*.nc")), hold_after="chunk")
     message = _message(err)
-    assert code == 130 and "of 8 chunks stored" in message and "resume" in message, err
+    assert code == 130 and "1 of 8 chunks stored" in message and "resume" in message, err
     proc = tippedisk(*args, cwd=tmp_path)
     assert proc.returncode == 0, _stderr(proc)
     ds = td.load(tmp_path / "b.nc")
@@ -319,7 +323,8 @@ CHECKPOINT_EVERY_STEP = [sys.executable, "-c", (
 def test_sigint_mid_moreau_run_resumes_bit_identically_from_its_checkpoint(tmp_path):
     args = ["simulate", "--model", "m2", "--t-end", "2", "-o", "m.nc"]
     checkpoint = tmp_path / "m.nc.checkpoint.npz"
-    code, err = _interrupt(args, tmp_path, lambda run: checkpoint.exists(), runner=CHECKPOINT_EVERY_STEP)
+    code, err = _interrupt(args, tmp_path, lambda run: checkpoint.exists(), runner=CHECKPOINT_EVERY_STEP,
+                           hold_after="checkpoint")
     message = _message(err)
     assert code == 130 and "interrupted; checkpoint at t = " in message, err
     assert "rerun the same command to resume" in message

@@ -21,6 +21,7 @@ import secrets
 import signal
 import stat
 import threading
+import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
@@ -99,6 +100,18 @@ def remove_stale_parts(path: str | os.PathLike) -> None:
         if match and int(match.group(1)) != os.getpid() and not _pid_alive(int(match.group(1))):
             with contextlib.suppress(OSError):
                 candidate.unlink()
+
+
+HOLD_VARIABLE = "TIPPEDISK_HOLD_AFTER"
+
+
+def hold_for_interrupt(event: str) -> None:
+    """A hook for interrupt tests: when the environment variable TIPPEDISK_HOLD_AFTER names ``event``
+    ("checkpoint", "chunk"), the process waits here, just after that event, until Ctrl-C (SIGINT) ends it, so a
+    test triggers on the event and never races a run that finishes within milliseconds of it."""
+    if os.environ.get(HOLD_VARIABLE) == event:
+        while True:
+            time.sleep(0.01)
 
 
 def glob_escape(name: str) -> str:

@@ -384,6 +384,7 @@ def _run_registered(sweep, bounds, output, client, threads, progress, on_chunk, 
         results[i] = res
         if d is not None:
             _write_chunk(d, i, *bounds[i], res, cfg_hash, cfg)
+            files.hold_for_interrupt("chunk")
         bar.update(bounds[i][1] - bounds[i][0])
         if on_chunk is not None:
             on_chunk(i)

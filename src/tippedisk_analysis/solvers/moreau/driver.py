@@ -10,7 +10,7 @@ import time as _time
 
 import numpy as np
 
-from ... import defaults
+from ... import defaults, files
 from ... import kinematics as kin
 from ...errors import ParameterError
 from ...models import moreau_geometry as geo
@@ -206,6 +206,7 @@ def integrate(model: MoreauModel, setup: Setup, initial: InitialState, t_end: fl
             if resume is not None and _time.perf_counter() - last_save > defaults.CHECKPOINT_SECONDS:
                 resume.save(q=q, u=u, ex_G=ex_G, P_last=P_last, stats=stats, out=out[:rows], done=done, status=status)
                 last_save = _time.perf_counter()
+                files.hold_for_interrupt("checkpoint")
     finally:
         if bar is not None:
             bar.close()
