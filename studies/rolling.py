@@ -110,7 +110,7 @@ def family_figure(families):
         ax[0, j].plot(x, ds.min_lambda_N, ".-", label="smallest lambda_N")
         ax[0, j].axhline(0, color="k", lw=0.8)
         for b in ar.consistency_boundary(ds):
-            ax[0, j].axvline(b, color="tab:red", ls=":", label=f"rolling consistent up to {b:.5g}")
+            ax[0, j].axvline(b, color="tab:red", ls=":", label=f"the cone margin crosses 0 at {b:.5g}")
         start = float(x[np.argmin(np.abs(ds.arclength.values))])
         ax[0, j].axvline(start, color="0.5", ls="--", label="the orbit at the torus's centre")
         ax[0, j].set_ylabel("[N]")
@@ -155,7 +155,7 @@ def main(output_dir: str = "output", quick: bool = False):
         ds = ar.family(orbit, parameter, bounds, max_points=4 if quick else 40)
         td.save(ds, out / f"rolling_family_{'energy' if parameter == 'E_tot' else 'spin'}.nc")
         boundary = ", ".join(f"{b:.6g}" for b in ar.consistency_boundary(ds)) or "none"
-        print(f"family in {parameter}: {ds.attrs['message']}; rolling stops being consistent at {boundary}")
+        print(f"family in {parameter}: {ds.attrs['message']}; the cone margin crosses zero at {boundary}")
         families.append(ds)
     save(family_figure(families), out / "rolling_family.png")
     return out

@@ -361,17 +361,11 @@ def family(orbit: dy.PeriodicOrbit, parameter: str, bounds: tuple, *, max_points
 
 
 def consistency_boundary(ds: xr.Dataset) -> list[float]:
-    """The family parameter values where the smallest cone margin first crosses zero on either side of the
-    start orbit (linear interpolation between the bracketing orbits); empty if rolling stays consistent."""
+    """Every family parameter value where the smallest cone margin crosses zero along the branch (linear
+    interpolation between the bracketing orbits), in the order of the branch; empty if rolling stays
+    consistent. Rolling is consistent where the margin is positive: between crossings it may become so
+    again (the energy family: inconsistent below 0.36684 J, consistent again on [0.3583, 0.3602] J)."""
     parameter = ds.attrs["parameter"]
     value, margin = ds[parameter].values, ds["min_cone_margin"].values
-    start = int(np.argmin(np.abs(ds["arclength"].values)))
-    found = []
-    for step in (-1, 1):
-        k = start
-        while 0 <= k + step < len(margin) and margin[k + step] > 0:
-            k += step
-        if 0 <= k + step < len(margin) and margin[k] > 0:
-            a, b = margin[k], margin[k + step]
-            found.append(float(value[k] + (value[k + step] - value[k]) * a / (a - b)))
-    return found
+    k = np.flatnonzero(np.sign(margin[:-1]) * np.sign(margin[1:]) < 0)
+    return [float(v) for v in value[k] + (value[k + 1] - value[k]) * margin[k] / (margin[k] - margin[k + 1])]
