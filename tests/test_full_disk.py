@@ -28,6 +28,7 @@ def full_disk(request, monkeypatch):
     ["simulate", "--model", "h1", "--t-end", "0.01"],
     ["simulate", "--model", "m1", "--t-end", "0.001"],
     ["stability-map", "--omega", "30:40:2", "--eps", "0.1"],
+    ["bifurcation", "--omega", "20:30:4", "--t-end", "1", "--t-transient", "0.5"],  # chunks of a sweep
 ])
 def test_a_full_disk_is_one_line_and_exit_2(tmp_path, capsys, full_disk, argv):
     out = tmp_path / "out.nc"

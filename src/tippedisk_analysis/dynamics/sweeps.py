@@ -43,7 +43,7 @@ import numpy as np
 import xarray as xr
 
 from .. import files, resources
-from ..errors import Interrupted, ParameterError, TippediskWarning
+from ..errors import Interrupted, OutputError, ParameterError, TippediskWarning
 
 CHUNK_PATTERN = "chunk_{:05d}.nc"
 IN_FLIGHT_PER_WORKER = 2  # chunks queued per worker: enough to keep it busy, bounded for huge grids
@@ -399,6 +399,10 @@ def _run_registered(sweep, bounds, output, client, threads, progress, on_chunk, 
     except KeyboardInterrupt:
         bar.close()
         raise _interrupted(sweep, d, created, len(results), len(bounds), n_resumed) from None
+    except OutputError:  # a chunk could not be written (a full disk): no empty chunk directory left behind
+        if d is not None and created and not stored_chunks(d) and not _others_running(d):
+            shutil.rmtree(d, ignore_errors=True)
+        raise
     finally:
         bar.close()
     merged = {k: np.concatenate([np.asarray(results[i][k]) for i in range(len(bounds))]) for k in sweep.variables}
