@@ -209,6 +209,22 @@ def test_lorenz_symmetric_pair_and_starts_on_the_symmetry_axis():
             assert x_end[out[4 - i, 4 - j]] == pytest.approx(-x_end[out[i, j]], rel=1e-12)
 
 
+def test_a_period_four_orbit_is_periodic_not_irregular():
+    """Roessler at c = 4 winds four times before it closes: the latest near return is a neighbouring strand.
+    The attractor is the period-4 orbit, its period the sum of scipy's four return times."""
+    s = zoo.roessler(4.0)
+    ds = dy.basins(s, dy.Grid(("x", "y", "z"), (-10, -10, 0), (10, 10, 20), (40, 40, 40)),
+                   {"x": (-3.0, 3.0, 4), "y": (-3.0, 3.0, 4)}, horizon=400.0, progress=False)
+    assert ds.sizes["attractor"] == 1 and int(ds.attractor_kind[0]) == PERIODIC and np.all(ds.outcome.values == 0)
+    section = lambda t, u: u[1]  # noqa: E731
+    section.direction = -1
+    rhs = lambda t, u: [-u[1] - u[2], u[0] + 0.2 * u[1], 0.2 + u[2] * (u[0] - 4.0)]  # noqa: E731
+    run = zoo.reference_run(rhs, [1.0, 1.0, 0.0], 1000.0, events=section)
+    returns = np.diff(run.t_events[0][-9:])
+    np.testing.assert_allclose(returns[:4], returns[4:], rtol=1e-7)  # period 4
+    assert float(ds.attractor_period[0]) == pytest.approx(returns[:4].sum(), rel=1e-8)
+
+
 @pytest.mark.slow
 def test_chen_chaos_is_irregular_with_a_positive_exponent():
     """Chen's attractor: the one attractor is irregular, its largest Lyapunov exponent positive and the sum of

@@ -78,6 +78,11 @@ def lorenz(rho: float = 15.0) -> dy.System:
                      parameters={"rho": rho})
 
 
+def roessler(c: float = 4.0) -> dy.System:
+    """Roessler (a, b) = (0.2, 0.2): at c = 4 a stable period-4 orbit (four loops before it closes)."""
+    return dy.System("roessler_user", [x, y, z], [-y - z, x + 0.2 * y, 0.2 + z * (x - p0)], parameters={"c": c})
+
+
 def selkov(b: float = 0.6) -> dy.System:
     """Sel'kov's glycolysis model x' = -x + a y + x^2 y, y' = b - a y - x^2 y, a = 0.08."""
     return dy.System("selkov_user", [x, y], [-x + 0.08 * y + x**2 * y, p0 - 0.08 * y - x**2 * y], parameters={"b": b})

@@ -252,6 +252,18 @@ def return_lag(grid: Grid, settings: RecurrenceSettings, observed: np.ndarray, t
     return None
 
 
+def closest_return(grid: Grid, settings: RecurrenceSettings, observed: np.ndarray, times: np.ndarray) -> float | None:
+    """The lag to the earlier sample closest to the last one (max-norm in cells, within return_distance), past
+    an excursion of more than 2 return_distance: a period or a multiple of it. None: no return."""
+    d = np.max(np.abs(grid.difference(observed, observed[:, -1:])), axis=0)
+    far = np.flatnonzero(d[:-1] > 2 * settings.return_distance)
+    if not len(far):
+        return None
+    before = d[: far[-1]]
+    best = int(np.argmin(before)) if len(before) else -1
+    return float(times[-1] - times[best]) if best >= 0 and before[best] <= settings.return_distance else None
+
+
 def periodic_description(problem: Problem, state, pars, guess: float, core: DescribeContext) -> Description | None:
     """A periodic attractor through ``state`` with period near ``guess`` (refined on a re-integration), or None."""
     grid = problem.grid

@@ -30,7 +30,7 @@ from ..lyapunov import spectrum
 from ..orbits import find_orbit
 from ..system import System
 from .mapping import map_points
-from .problem import Problem, circular_mean, describe, equilibrium_description, periodic_description, return_lag
+from .problem import Problem, circular_mean, closest_return, describe, equilibrium_description
 from .records import BASE_KINDS, Candidate, Description, Grid, RecurrenceSettings
 from .tables import assemble_table, chunk_result, column_names
 
@@ -75,8 +75,10 @@ class SystemProblem(Problem):
         * a periodic orbit: shooting from the recorded state with the recorded period closes the orbit, with
           the period within ``PERIOD_RTOL`` of the recorded one and every nontrivial multiplier inside the unit
           circle; the cells of the whole orbit become the attractor's;
-        * an orbit longer than the window: the run goes on for LONG_WINDOWS windows and a return
-          (:func:`.problem.return_lag`) to one of RETURN_REFERENCES of its samples is verified as above;
+        * an orbit longer than the window: the run goes on for LONG_WINDOWS windows and the closest return
+          (:func:`.problem.closest_return`) to one of RETURN_REFERENCES of its samples is the period guess of
+          the shooting, verified as above (an orbit that winds several times: its neighbouring strands are no
+          return);
         * irregular: no equilibrium or orbit verified, and the largest Lyapunov exponent is not negative
           (chaos or a torus); a contracting run is no attractor yet.
 
@@ -86,7 +88,7 @@ class SystemProblem(Problem):
         if desc is not None and desc.kind == "equilibrium":
             return self._with_neighbourhood(desc, candidate.observed)
         if desc is not None and desc.kind == "periodic":
-            verified = self._verified_orbit(desc, candidate.pars)
+            verified = self._orbit_attractor(desc.representative, desc.period, candidate.pars, core.settings.dt)
             if verified is not None:
                 return verified
         x = self._contracting_equilibrium(candidate.states, candidate.pars)
@@ -100,11 +102,11 @@ class SystemProblem(Problem):
             return None
         observed = self.observe(states, np.asarray(candidate.pars))
         for end in np.linspace(len(times) - 1, len(times) // 2, RETURN_REFERENCES).astype(int):
-            # a return to the sample at ``end`` (the last sample may lie on a fast jump, which has none)
-            lag = return_lag(self.grid, s, observed[:, : end + 1], times[: end + 1])
+            # the closest return to the sample at ``end`` (the last sample may lie on a fast jump, which has
+            # none; the latest return may be a neighbouring strand of an orbit that winds several times)
+            lag = closest_return(self.grid, s, observed[:, : end + 1], times[: end + 1])
             if lag is not None:
-                periodic = periodic_description(self, states[:, end], candidate.pars, lag, core)
-                verified = None if periodic is None else self._verified_orbit(periodic, candidate.pars)
+                verified = self._orbit_attractor(states[:, end], lag, candidate.pars, s.dt)
                 if verified is not None:
                     return verified
                 break  # a near return of an orbit that does not close (a chaotic run comes close to itself)
@@ -190,24 +192,33 @@ class SystemProblem(Problem):
         h = len(V) // 2
         return x if V[-1] < 0.5 * V[0] and V[h:].max() < V[:h].max() else None
 
-    def _verified_orbit(self, desc: Description, pars) -> Description | None:
-        """``desc`` with the shooting orbit's period, state and cells if the orbit closes and is stable."""
+    def _orbit_attractor(self, state, period: float, pars, dt: float) -> Description | None:
+        """The periodic attractor through ``state`` if shooting with the guess ``period`` closes an orbit whose
+        least period divides it (to 2 dt + PERIOD_RTOL) and whose nontrivial multipliers lie inside the unit
+        circle; its description (centroid, spread, amplitude, cells) is that of the shooting orbit."""
+        pars = np.asarray(pars, dtype=float)
         for segments in (1, 4):
-            orbit = find_orbit(self.system, desc.representative, desc.period, pars, segments=segments)
+            orbit = find_orbit(self.system, state, period, pars, segments=segments)
             if orbit.converged:
                 break
         else:
             self._reject("orbit_not_closed")
             return None
-        if abs(orbit.period - desc.period) > PERIOD_RTOL * desc.period:
+        turns = max(1, round(period / orbit.period))
+        if abs(period - turns * orbit.period) > 2 * dt + PERIOD_RTOL * period:
             self._reject("orbit_not_closed")
             return None
         if orbit.stability != STABILITY["stable"]:
             self._reject("unstable_orbit")
             return None
-        keys = self.grid.keys(self.observe(orbit.samples.T, np.asarray(pars)))
-        return dataclasses.replace(desc, representative=orbit.states[0], period=float(orbit.period),
-                                   cells=tuple(int(k) for k in np.unique(keys[keys >= 0])))
+        observed = self.observe(orbit.samples.T, pars)
+        unwrapped = self.grid.unwrap(observed)
+        keys = self.grid.keys(observed)
+        k = self.amplitude_index
+        return Description("periodic", orbit.states[0], circular_mean(self.grid, observed),
+                           0.5 * np.ptp(unwrapped, axis=1) * self.grid.widths,
+                           0.5 * float(np.ptp(unwrapped[k])) * self.grid.widths[k], float(orbit.period),
+                           cells=tuple(int(c) for c in np.unique(keys[keys >= 0])))
 
     def _not_contracting(self, state, pars, window: float) -> bool:
         """Whether the largest Lyapunov exponent from ``state`` over ``window`` is not negative (> -3 / window,
