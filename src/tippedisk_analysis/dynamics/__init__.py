@@ -29,6 +29,10 @@ _PUBLIC = {
     # Lyapunov exponents, Poincaré sections, attractors, sweeps
     "lyapunov_spectrum": "lyapunov", "poincare_section": "poincare", "basins": "attractors.system_problem",
     "Grid": "attractors.records", "Sweep": "sweeps", "run_sweep": "sweeps",
+    # hybrid (event-driven) and Filippov systems
+    "HybridSystem": "hybrid", "Guard": "hybrid", "Jump": "hybrid", "simulate_hybrid": "hybrid",
+    "Leg": "hybrid_orbits", "find_hybrid_orbit": "hybrid_orbits", "legs_from_run": "hybrid_orbits",
+    "filippov_system": "filippov",
 }
 
 __all__ = sorted(_PUBLIC)

@@ -80,13 +80,14 @@ class System:
     (:class:`Event`, terminal); ``n_trivial``: trivial Floquet multipliers (1 + independent integrals or
     families); ``units`` {state or parameter name: UDUNITS units}, ``time_units`` (default "1"): undeclared
     units are taken as dimensionless ("1") in the datasets; ``compact_mode``: heyoka's compact mode for large
-    systems.
+    systems; ``strict_parameters`` (default True): every parameter must appear in an expression (False for a
+    hybrid system's mode whose guards or jumps use parameters its equations do not).
     """
 
     def __init__(self, name: str, variables, rhs, parameters: dict | None = None, *, state_names=None,
                  state_scale=None, observables: dict | None = None, integrals: dict | None = None, events=(),
                  n_trivial: int = 1, units: dict | None = None, time_units: str = "1", compact_mode: bool = False,
-                 description: str = ""):
+                 description: str = "", strict_parameters: bool = True):
         if not isinstance(name, str) or not name:
             raise ParameterError("a System needs a name (a non-empty string), e.g. System('ab', ...)")
         self.name = name
@@ -114,6 +115,7 @@ class System:
         self.time_units = str(time_units)
         self.compact_mode = bool(compact_mode)
         self.description = description
+        self.strict_parameters = bool(strict_parameters)
         self._check_names()
         self._check_parameters()
         self._key = None
@@ -153,9 +155,10 @@ class System:
                                  f"parameter(s) are declared ({', '.join(self.parameter_names) or 'none'}); declare "
                                  "one name per hy.par index, in index order")
         unused = [i for i in range(n) if i not in used]
-        if unused:
+        if unused and self.strict_parameters:
             raise ParameterError(f"system {self.name!r}: parameter {self.parameter_names[unused[0]]!r} "
-                                 f"(hy.par[{unused[0]}]) appears in no expression; drop it or use it")
+                                 f"(hy.par[{unused[0]}]) appears in no expression; drop it or use it (a hybrid mode "
+                                 "whose guards or jumps use it: strict_parameters=False)")
 
     # -- names and parameter vectors
     @property
@@ -181,6 +184,15 @@ class System:
         new.pars = self.with_pars(pars, **values)
         new.parameters = dict(zip(self.parameter_names, map(float, new.pars)))
         return new
+
+    def with_events(self, name: str, events) -> System:
+        """The same equations under ``name`` with the terminal ``events`` added after its own (e.g. the guards
+        of a hybrid system's mode); compiled separately (its key differs)."""
+        return System(name, self.variables, self.declared_rhs, self.parameters, state_names=self.state_names,
+                      state_scale=self.state_scale, observables=self.observables, integrals=self.integrals,
+                      events=(*self.events, *events), n_trivial=self.n_trivial, units=self.units,
+                      time_units=self.time_units, compact_mode=self.compact_mode, description=self.description,
+                      strict_parameters=False)
 
     def parameter_index(self, name: str) -> int:
         if name not in self.parameter_names:
@@ -284,6 +296,18 @@ class System:
             return None
         exprs = [e for e, _u in self.observables.values()]
         return self._cached(("observables",), "the observables", lambda: hy.cfunc(exprs, list(self.variables)))
+
+    def function(self, label: str, expressions, what: str = "a function"):
+        """cfunc of ``expressions`` (of this system's states and runtime parameters) over the states, compiled
+        once per process for these equations and ``label`` (e.g. a guard's gradient, a jump's reset)."""
+        exprs = [hy.expression(e) if isinstance(e, int | float) else e for e in expressions]
+        key = ("function", label, tuple(map(str, exprs)))
+        return self._cached(key, what, lambda: hy.cfunc(exprs, list(self.variables)))
+
+    def gradient_expressions(self, expressions) -> list:
+        """Exact Jacobian rows d e / d x of ``expressions``, row-major (len(expressions) * n expressions)."""
+        jac = hy.diff_tensors(list(expressions), diff_args=list(self.variables), diff_order=1).jacobian
+        return list(np.asarray(jac).ravel())
 
     def evaluate(self, function, states, pars) -> np.ndarray:
         """A cfunc of this system at states (n,) or (n, N) with pars (p,) or (p, N): (outputs,) or (outputs, N)."""

@@ -1,0 +1,346 @@
+"""Hybrid (event-driven) systems: smooth modes, guards that end them, and jumps between them.
+
+A :class:`HybridSystem` has modes, each a :class:`~.system.System` over its own states (all modes share the
+runtime parameters, by name and order). A :class:`Guard` of a mode is an expression of the mode's states: the
+mode ends where it crosses zero in the guard's direction (heyoka locates the crossing to round-off on the step's
+Taylor polynomials). The guard then takes the first of its :class:`Jump` s whose condition holds (``when`` >= 0,
+or no condition) into the jump's target mode. The target's states are set by ``reset`` {target state name:
+expression of the source states}; a target state that ``reset`` does not name keeps the source state of the
+same name, so an empty reset is the identity.
+
+:func:`simulate_hybrid` integrates event to event; the modes' own terminal events (a System's ``events``) end a run
+with their name as status, more than ``max_switches`` jumps with ``zeno``, a guard none of whose jumps applies
+with ``no_jump``. Sections across modes (:func:`simulate_hybrid` with ``section``) are recorded by every mode's
+integrator. Periodic orbits by multi-segment shooting with saltation matrices: :mod:`.hybrid_orbits`;
+Filippov sliding from the two sides of a switching surface: :mod:`.filippov`.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from dataclasses import dataclass, field
+
+import heyoka as hy
+import numpy as np
+
+from ..errors import ParameterError
+from .poincare import Recorder
+from .system import DIRECTIONS, Event, System
+
+MAX_SWITCHES = 10_000
+ROUND_OFF = 1e-13  # a guard within this (relative to the state's size) of zero on entry is at zero
+CLEARANCE = 1e-3  # the fraction of a Taylor step the flow takes, with a guard that is at zero ignored, to leave it
+
+
+@dataclass(frozen=True)
+class Jump:
+    """Into mode ``target`` with its states ``reset`` {name: expression of the source states} (unnamed states
+    keep the source state of their name); taken if ``when`` (an expression of the source states) is >= 0 at
+    the guard, or always without ``when``."""
+
+    target: str
+    reset: dict = field(default_factory=dict)
+    when: object = None
+
+
+@dataclass(frozen=True)
+class Guard:
+    """Mode ``mode`` ends where ``expression`` (of its states) crosses zero in ``direction``; the first of
+    ``jumps`` whose condition holds is taken."""
+
+    name: str
+    mode: str
+    expression: object
+    jumps: tuple
+    direction: str = "negative"
+
+    def __post_init__(self):
+        jumps = (self.jumps,) if isinstance(self.jumps, Jump) else tuple(self.jumps)
+        object.__setattr__(self, "jumps", jumps)
+        if not jumps or not all(isinstance(j, Jump) for j in jumps):
+            raise ParameterError(f"guard {self.name!r}: give one Jump or a sequence of Jumps")
+        if self.direction not in DIRECTIONS:
+            raise ParameterError(f"guard {self.name!r}: direction {self.direction!r}; give one of "
+                                 f"{', '.join(DIRECTIONS)}")
+
+
+class HybridSystem:
+    """Modes {name: System} and guards (:class:`Guard`); checked once, compiled on demand."""
+
+    def __init__(self, name: str, modes: dict, guards, description: str = ""):
+        self.name, self.description = name, description
+        self.modes = dict(modes)
+        self.guards = tuple(guards)
+        if not self.modes:
+            raise ParameterError(f"hybrid system {name!r} needs at least one mode")
+        first = next(iter(self.modes.values()))
+        self.parameter_names, self.pars = first.parameter_names, first.pars.copy()
+        for mode, system in self.modes.items():
+            if system.parameter_names != self.parameter_names:
+                raise ParameterError(f"hybrid system {name!r}: mode {mode!r} has the parameters "
+                                     f"{', '.join(system.parameter_names) or 'none'}, not "
+                                     f"{', '.join(self.parameter_names) or 'none'}; every mode takes the same ones")
+        seen = set()
+        for g in self.guards:
+            if g.mode not in self.modes:
+                raise ParameterError(f"guard {g.name!r}: no mode {g.mode!r}; the modes are {', '.join(self.modes)}")
+            if (g.mode, g.name) in seen or g.name in {e.name for e in self.modes[g.mode].events}:
+                raise ParameterError(f"guard {g.name!r} of mode {g.mode!r}: the name is taken; give each guard of a "
+                                     "mode its own name")
+            seen.add((g.mode, g.name))
+            for j in g.jumps:
+                self._check_jump(g, j)
+        self._systems: dict = {}
+
+    def _check_jump(self, g: Guard, j: Jump) -> None:
+        if j.target not in self.modes:
+            raise ParameterError(f"guard {g.name!r}: no target mode {j.target!r}; the modes are "
+                                 f"{', '.join(self.modes)}")
+        source, target = self.modes[g.mode], self.modes[j.target]
+        unknown = [k for k in j.reset if k not in target.state_names]
+        if unknown:
+            raise ParameterError(f"guard {g.name!r}: mode {j.target!r} has no state {unknown[0]!r} to reset")
+        missing = [k for k in target.state_names if k not in j.reset and k not in source.state_names]
+        if missing:
+            raise ParameterError(f"guard {g.name!r} into {j.target!r}: give the state {missing[0]!r} in reset (mode "
+                                 f"{g.mode!r} has no state of that name)")
+
+    # -- compiled pieces
+    def mode_guards(self, mode: str) -> tuple:
+        return tuple(g for g in self.guards if g.mode == mode)
+
+    def system(self, mode: str) -> System:
+        """The mode's System with its guards appended to its terminal events (after its own)."""
+        if mode not in self.modes:
+            raise ParameterError(f"{self.name} has no mode {mode!r}; choose one of {', '.join(self.modes)}")
+        if mode not in self._systems:
+            base = self.modes[mode]
+            self._systems[mode] = base.with_events(f"{self.name}.{mode}", [
+                Event(g.name, g.expression, g.direction) for g in self.mode_guards(mode)])
+        return self._systems[mode]
+
+    def reset_expressions(self, g: Guard, j: Jump) -> list:
+        """The target's states as expressions of the source's states."""
+        source, target = self.modes[g.mode], self.modes[j.target]
+        return [j.reset[k] if k in j.reset else source.variables[source.state_index(k)] for k in target.state_names]
+
+    def _jump_function(self, g: Guard, k: int):
+        j = g.jumps[k]
+        exprs = [j.when if j.when is not None else 1.0, *self.reset_expressions(g, j)]
+        return self.modes[g.mode].function(f"jump {g.name} {k}", exprs, f"the jump {g.name} -> {j.target}")
+
+    def jump(self, mode: str, guard: str, state, pars=None) -> tuple[int, str, np.ndarray]:
+        """(jump index, target mode, target state) of ``guard`` of ``mode`` at ``state``; index -1 (and the
+        state unchanged) when none of its jumps applies."""
+        g = self.guard(mode, guard)
+        pars = self.with_pars(pars)
+        source = self.modes[mode]
+        for k, j in enumerate(g.jumps):
+            out = source.evaluate(self._jump_function(g, k), np.asarray(state, dtype=float), pars)
+            if out[0] >= 0.0:
+                return k, j.target, np.array(out[1:])
+        return -1, mode, np.asarray(state, dtype=float)
+
+    def guards_at_zero(self, mode: str, state, pars) -> set:
+        """Names of the guards of ``mode`` that are zero to round-off at ``state`` (e.g. the surface a sliding
+        motion has just left)."""
+        guards = self.mode_guards(mode)
+        if not guards:
+            return set()
+        x = np.asarray(state, dtype=float)
+        values = self.modes[mode].evaluate(self.modes[mode].function(
+            "guards", [g.expression for g in guards], "the guards"), x, pars)
+        size = max(1.0, float(np.max(np.abs(x)))) if x.size else 1.0
+        return {g.name for g, value in zip(guards, values) if abs(value) <= ROUND_OFF * size}
+
+    def guard(self, mode: str, name: str) -> Guard:
+        for g in self.mode_guards(mode):
+            if g.name == name:
+                return g
+        raise ParameterError(f"mode {mode!r} of {self.name} has no guard {name!r}")
+
+    def with_pars(self, pars=None, **values) -> np.ndarray:
+        return next(iter(self.modes.values())).with_pars(self.pars if pars is None else pars, **values)
+
+    def __repr__(self) -> str:
+        return f"HybridSystem({self.name!r}: modes {', '.join(self.modes)}; {len(self.guards)} guard(s))"
+
+
+@dataclass
+class Segment:
+    """A mode's stretch of a run: its samples (the output grid inside it, its start and its end)."""
+
+    mode: str
+    time: np.ndarray
+    states: np.ndarray  # (samples, mode's n)
+
+
+@dataclass(frozen=True)
+class Switch:
+    time: float
+    source: str
+    guard: str
+    jump: int
+    target: str
+    before: np.ndarray  # the source state at the guard
+    after: np.ndarray  # the target state
+
+
+@dataclass
+class HybridRun:
+    segments: list
+    switches: list
+    status: str
+    message: str
+    t_final: float
+    start: tuple  # (mode, state)
+    crossings: dict | None = None  # with a section: {mode: (times, states)}
+
+    @property
+    def modes_entered(self) -> list:
+        """[(time, mode)]: the initial mode, then each jump's target."""
+        return [(self.segments[0].time[0] if self.segments else 0.0, self.start[0])] + \
+            [(s.time, s.target) for s in self.switches]
+
+
+def section_quantity(system: System, name: str):
+    if name in system.state_names:
+        return system.variables[system.state_index(name)]
+    if name in system.observables:
+        return system.observables[name][0]
+    raise ParameterError(f"section quantity {name!r} is neither a state nor an observable of mode {system.name}")
+
+
+def _integrators(hybrid: HybridSystem, tol: float, section) -> dict:
+    out = {}
+    for mode in hybrid.modes:
+        system = hybrid.system(mode)
+        nt = ()
+        if section is not None:
+            q = section_quantity(system, section["quantity"])
+            level = hy.par[len(hybrid.parameter_names)]
+            nt = ((hy.sin(q - level) if section.get("modulo") else q - level, Recorder(),
+                   section.get("direction", "positive")),)
+        out[mode] = copy.copy(system.taylor(tol, events=True, nt_events=nt))
+    return out
+
+
+def _configure_recorder(rec: Recorder, system: System, section: dict, pars: np.ndarray) -> None:
+    rec.t_transient, rec.level = float(section.get("transient", 0.0)), float(section["level"])
+    rec.modulo, rec.times, rec.states = bool(section.get("modulo")), [], []
+    if rec.modulo and section["quantity"] in system.state_names:
+        rec.q_index = system.state_index(section["quantity"])
+    elif rec.modulo:
+        rec.q_func = system.function("section", [section_quantity(system, section["quantity"])])
+        rec.pars = pars
+
+
+def _leave_zeros(hybrid: HybridSystem, mode: str, t: float, x: np.ndarray, pars, tol: float, grid):
+    """(t, x) to start ``mode`` from: where a guard is zero on entry (the surface a sliding motion has just left,
+    a reset onto its own guard), heyoka would find that zero again at once, so the flow first takes
+    CLEARANCE of a Taylor step without it (as heyoka's cooldown does within one integration); a crossing of
+    that guard inside this stretch is not seen. Unchanged where no guard is at zero, or another event, or an
+    output time, falls inside."""
+    at_zero = hybrid.guards_at_zero(mode, x, pars)
+    if not at_zero:
+        return t, x
+    others = [e.name for e in hybrid.system(mode).events if e.name not in at_zero]
+    ta = copy.copy(hybrid.system(mode).taylor(tol, events=tuple(others)))
+    ta.pars[:] = pars[: len(ta.pars)]
+    ta.time, ta.state[:] = t, x
+    h = abs(ta.step(write_tc=False)[1])
+    dt = CLEARANCE * (h if math.isfinite(h) else 1.0)  # an infinite step: a polynomial flow (one time unit)
+    if grid is not None and np.any((grid > t) & (grid <= t + dt)):
+        dt = 0.5 * float(grid[grid > t].min() - t)
+    ta.time, ta.state[:] = t, x
+    if others:
+        ta.reset_cooldowns()
+    outcome = ta.step(max_delta_t=dt, write_tc=False)[0]
+    if outcome not in (hy.taylor_outcome.success, hy.taylor_outcome.time_limit) or not np.all(np.isfinite(ta.state)):
+        return t, x
+    return float(ta.time), np.array(ta.state)
+
+
+def simulate_hybrid(hybrid: HybridSystem, mode: str, state, t_end: float, *, pars=None, grid=None, tol: float = 1e-13,
+             max_switches: int = MAX_SWITCHES, section: dict | None = None) -> HybridRun:
+    """Integrate from ``state`` in ``mode`` to ``t_end``, jump to jump.
+
+    grid: output times (the run's samples inside each segment; each segment also holds its end state); without
+    one a segment holds its start and end. section: {"quantity", "level", "modulo", "direction", "transient"}
+    records the crossings in every mode (``run.crossings``)."""
+    if not (math.isfinite(t_end) and t_end > 0):
+        raise ParameterError(f"t_end = {t_end!r}: give a positive finite time")
+    if not (isinstance(max_switches, int) and max_switches > 0):
+        raise ParameterError(f"max_switches = {max_switches!r} must be a positive integer")
+    pars = hybrid.with_pars(pars)
+    integrators = _integrators(hybrid, tol, section)
+    for m, ta in integrators.items():
+        ta.pars[:] = np.append(pars, section["level"])[: len(ta.pars)] if section else pars[: len(ta.pars)]
+        if section is not None:
+            _configure_recorder(ta.nt_events[0].callback, hybrid.system(m), section, pars)
+    x = np.asarray(state, dtype=float)
+    if x.shape != (hybrid.system(mode).n,):
+        raise ParameterError(f"mode {mode!r} has {hybrid.modes[mode].n} states, not {x.size}")
+    grid = None if grid is None else np.asarray(grid, dtype=float)
+    run = HybridRun([], [], "completed", f"reached t_end = {t_end:g}", 0.0, (mode, x.copy()))
+    t = 0.0
+    while True:
+        t, x = _leave_zeros(hybrid, mode, t, x, pars, tol, grid)
+        ta = integrators[mode]
+        ta.time, ta.state[:] = t, x
+        ta.reset_cooldowns()
+        if grid is None:
+            res = ta.propagate_until(float(t_end))
+            seg_time, out = np.array([t]), x[None, :].copy()
+        else:
+            times = np.concatenate([[t], grid[(grid > t) & (grid <= t_end)]])
+            res = ta.propagate_grid(times)
+            first = 0 if not run.segments else 1  # a later segment's start is the previous segment's end
+            out = np.asarray(res[-1])[first:]
+            seg_time = times[first:first + len(out)]
+        outcome = res[0]
+        if outcome == hy.taylor_outcome.time_limit:
+            if grid is None:
+                seg_time, out = np.append(seg_time, ta.time), np.vstack([out, ta.state])
+            run.segments.append(Segment(mode, seg_time, out))
+            t = float(ta.time)
+            break
+        start, t, x = x, float(ta.time), np.array(ta.state)
+        if not (np.all(np.isfinite(x)) and math.isfinite(t)):
+            last = float(seg_time[-1]) if len(seg_time) else float(run.segments[-1].time[-1]) if run.segments else 0.0
+            run.status = "nonfinite"
+            run.message = f"the state became non-finite after t = {last:.6g}; try a smaller tol"
+            if not run.segments and not len(out):
+                seg_time, out = np.array([0.0]), start[None, :]
+            run.segments.append(Segment(mode, seg_time, out))
+            t = last
+            break
+        run.segments.append(Segment(mode, np.append(seg_time, t), np.vstack([out, x])))
+        events = hybrid.system(mode).events
+        index = -int(outcome) - 1
+        if not 0 <= index < len(events):
+            run.status, run.message = "failed", f"heyoka stopped with {outcome!r} at t = {t:.6g}"
+            break
+        n_own = len(hybrid.modes[mode].events)
+        if index < n_own:
+            run.status, run.message = events[index].name, f"{events[index].name} at t = {t:.6g} in mode {mode}"
+            break
+        if len(run.switches) >= max_switches:
+            run.status, run.message = "zeno", (f"more than {max_switches} jumps by t = {t:.6g} (switches accumulate); "
+                                               "the event-driven integration cannot continue")
+            break
+        guard = events[index].name
+        k, target, after = hybrid.jump(mode, guard, x, pars)
+        if k < 0:
+            run.status, run.message = "no_jump", (f"guard {guard!r} of mode {mode!r} at t = {t:.6g}: none of its jumps "
+                                                  "applies; add a jump without condition")
+            break
+        run.switches.append(Switch(t, mode, guard, k, target, x, after))
+        mode, x = target, after
+    run.t_final = t
+    if section is not None:
+        run.crossings = {m: (np.array(ta.nt_events[0].callback.times),
+                             np.array(ta.nt_events[0].callback.states).reshape(-1, hybrid.modes[m].n))
+                         for m, ta in integrators.items()}
+    return run
