@@ -13,8 +13,8 @@ import pytest
 import tippedisk_analysis as td
 from tippedisk_analysis import kinematics as kin
 from tippedisk_analysis.errors import ParameterError
-from tippedisk_analysis.models import ode, rolling
-from tippedisk_analysis.solvers import hybrid
+from tippedisk_analysis import dynamics as dy
+from tippedisk_analysis.models import event_driven, ode, rolling, sliding
 
 SLIP_ONSET = 0.2889  # [s] the Table 3 start rolls until its contact force reaches the cone (measured below)
 
@@ -107,18 +107,17 @@ def test_moreau_model_1_converges_to_the_hybrid_model_through_the_inversion(hybr
 def test_slip_onset_keeps_the_contact_force_continuous():
     """The onset rule: sliding friction -mu lambda_N t with t = -lambda_T/|lambda_T| is the force rolling
     needed at the cone; lambda_N is the same in both modes there."""
-    cm = hybrid.compiled(1e-13)
+    system = event_driven.hybrid_system()
     pars = ode.parameter_vector()
-    roll = copy.copy(cm.rolling)
-    roll.time, roll.state[:], roll.pars[:] = 0.0, rolling.initial_state_vector(td.InitialState()), pars
-    roll.reset_cooldowns()
-    outcome = roll.propagate_until(1.0)[0]
-    assert int(outcome) == -3 and roll.time == pytest.approx(SLIP_ONSET, abs=1e-4)  # the cone
-    x = np.array(roll.state)
-    o_roll = dict(zip(rolling.OUTPUT_NAMES, hybrid._outputs(cm.rolling_outputs, x, pars)[:, 0]))
-    _margin, phi = hybrid._onset_angle(cm, x, pars)
-    o_slide = dict(zip(ode.OUTPUT_NAMES, hybrid._outputs(cm.sliding_outputs, np.concatenate([x, [0.0, phi, 0.0]]),
-                                                          pars)[:, 0]))
+    x0 = np.append(rolling.initial_state_vector(td.InitialState()), 0.0)
+    run = dy.simulate_hybrid(system, "rolling", x0, 1.0, pars=pars, max_switches=1)
+    onset = run.switches[0]
+    assert (onset.guard, onset.target) == ("slip_onset", "sliding")
+    assert onset.time == pytest.approx(SLIP_ONSET, abs=1e-4)  # the cone
+    o_roll = system.modes["rolling"].observe(onset.before, pars)
+    phi = onset.after[sliding.STATE_NAMES.index("slip_angle")]
+    at_rest = np.concatenate([onset.before[:8], [0.0, phi, 0.0]])  # the slip starting from 0 in its direction
+    o_slide = system.modes["sliding"].observe(at_rest, pars)
     mu = td.Friction().mu
     assert o_slide["lambda_N"] == pytest.approx(o_roll["lambda_N"], rel=1e-12)
     np.testing.assert_allclose(-mu * o_slide["lambda_N"] * np.array([math.cos(phi), math.sin(phi)]),
