@@ -106,3 +106,26 @@ def test_importing_the_package_compiles_nothing():
             "print(sorted(m for m in ('numba', 'heyoka', 'matplotlib') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
+
+
+INTEGRATOR_BUILDERS = {"taylor_adaptive", "taylor_adaptive_batch", "var_ode_sys"}
+"""heyoka's integrator constructors: only the generic layer calls them (System.taylor), so every model of the
+disk is integrated, linearised and sectioned the one way."""
+
+
+@pytest.mark.parametrize("path", [p for p in _sources() if p.relative_to(PACKAGE).parts[0] != "dynamics"],
+                         ids=lambda p: str(p.relative_to(PACKAGE)))
+def test_no_integrator_is_built_outside_dynamics(path):
+    calls = [node.func.attr for node in ast.walk(ast.parse(path.read_text()))
+             if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
+             and node.func.attr in INTEGRATOR_BUILDERS]
+    assert not calls, (f"{path.relative_to(PACKAGE)} builds a heyoka integrator ({', '.join(calls)}); declare the "
+                       "model as a dynamics.System and take System.taylor")
+
+
+def test_the_integrator_rule_sees_a_builder():
+    """The rule above is not vacuous: the generic layer's System.taylor is found by it."""
+    tree = ast.parse((PACKAGE / "dynamics" / "system.py").read_text())
+    found = {node.func.attr for node in ast.walk(tree)
+             if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)}
+    assert {"taylor_adaptive", "taylor_adaptive_batch", "var_ode_sys"} <= found

@@ -15,7 +15,6 @@ from .analysis import outcome_config
 from .analysis import outcome_rules as rules
 from .analysis import reduced
 from .models import ode
-from .parameters import InitialState, Setup
 
 
 def finite_difference_jacobian(state, pars, h: float = 1e-6) -> np.ndarray:
@@ -44,12 +43,9 @@ class _FirstCrossing:
 @functools.lru_cache(maxsize=4)
 def _scalar_integrator(tol: float):
     """Scalar heyoka integrator of the outcome map's augmented system (the batch kernel's twin)."""
-    model, variables, sys, fall, outputs, gamma, lambda_N = rules._augmented_system()
-    x0 = np.append(ode.initial_state_vector(model, Setup(), InitialState()), [0.0, 0.0])
-    pos, neg = hy.event_direction.positive, hy.event_direction.negative
-    return hy.taylor_adaptive(sys, x0, pars=ode.parameter_vector(), tol=tol, t_events=[hy.t_event(fall, direction=neg)],
-                              nt_events=[hy.nt_event(gamma, _FirstCrossing(), direction=pos),
-                                         hy.nt_event(lambda_N, _FirstCrossing(), direction=neg)])
+    system, extra, crossings = rules.augmented_system()
+    return system.taylor(tol, events=("fell",), extra=extra, nt_events=tuple((x, _FirstCrossing(), d)
+                                                                             for x, d in crossings))
 
 
 def outcome_chunk_scalar(config: outcome_config.MapConfig | dict, start: int, stop: int) -> dict:

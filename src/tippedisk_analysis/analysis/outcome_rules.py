@@ -14,10 +14,8 @@ import math
 
 import numpy as np
 
-from ..compilation import compiling
 from ..models import ode
 from ..models.variables import FINAL_STATE_VARIABLES
-from ..parameters import InitialState, Setup
 from .outcome_config import FILL_TIME, OUTCOMES, MapConfig, prepare
 
 class _FirstCrossing:
@@ -32,21 +30,17 @@ class _FirstCrossing:
             self.first[batch_idx] = time
 
 
-def _augmented_system():
-    """ODE Model 1 plus the quadratures Q1' = sin(gamma), Q2' = z_S (window means).
-
-    Returns (model, variables, sys, fall, outputs, gamma, lambda_N): the event expressions of the
-    fall (terminal), the inversion (gamma = 0) and the lift-off (lambda_N = 0, non-terminal).
-    """
+def augmented_system():
+    """ODE Model 1 as a System with the quadratures Q1' = sin(gamma), Q2' = z_S (window means) as extra
+    equations, and the non-terminal events of the first inversion (gamma = 0 upwards) and lift-off (lambda_N = 0
+    downwards): (system, extra, nt_events) for :meth:`~tippedisk_analysis.dynamics.System.taylor`."""
     import heyoka as hy
 
-    model = ode.EULER
-    variables, sys, fall, outputs = ode.system(model)
+    system = ode.as_system(ode.EULER)
     q1, q2 = hy.make_vars("Q_sin_gamma", "Q_z_S")
-    gamma = variables[model.state_names.index("gamma")]
-    z_S = outputs[ode.OUTPUT_NAMES.index("z_S")]
-    sys = [*sys, (q1, hy.sin(gamma)), (q2, z_S)]
-    return model, variables, sys, fall, outputs, gamma, outputs[ode.OUTPUT_NAMES.index("lambda_N")]
+    gamma = system.variables[system.state_index("gamma")]
+    extra = ((q1, hy.sin(gamma)), (q2, system.observables["z_S"][0]))
+    return system, extra, ((gamma, "positive"), (system.observables["lambda_N"][0], "negative"))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -59,20 +53,12 @@ class BatchKernel:
 @functools.lru_cache(maxsize=4)
 def kernel(tol: float, batch_size: int = 4) -> BatchKernel:
     """Compiled batch integrator and outputs (cached per process; heyoka also caches on disk)."""
-    import heyoka as hy
-
-    model, variables, sys, fall, outputs, gamma, lambda_N = _augmented_system()
+    system, extra, crossings = augmented_system()
     B = int(batch_size)
-    x0 = np.append(ode.initial_state_vector(model, Setup(), InitialState()), [0.0, 0.0])
-    pars = ode.parameter_vector()
-    pos, neg = hy.event_direction.positive, hy.event_direction.negative
-    with compiling(f"the ODE Model 1 batch integrator of outcome maps ({B} lanes, tol {tol:g})"):
-        batch = hy.taylor_adaptive_batch(
-            sys, np.repeat(x0[:, None], B, axis=1), pars=np.repeat(pars[:, None], B, axis=1), tol=tol,
-            t_events=[hy.t_event_batch(fall, direction=neg)],
-            nt_events=[hy.nt_event_batch(gamma, _FirstCrossing(), direction=pos),
-                       hy.nt_event_batch(lambda_N, _FirstCrossing(), direction=neg)])
-        return BatchKernel(batch, hy.cfunc(outputs, variables), B)
+    batch = system.taylor(tol, batch=B, events=("fell",), extra=extra,
+                          nt_events=tuple((x, _FirstCrossing(), d) for x, d in crossings))
+    outputs = system.function("outputs", ode.system(ode.EULER)[3], "the outputs of ODE Model 1")
+    return BatchKernel(batch, outputs, B)
 
 
 RESULT_VARIABLES = {

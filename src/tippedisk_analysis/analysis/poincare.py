@@ -29,7 +29,6 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from ..compilation import compiling
 from ..dynamics.poincare import Recorder as _Recorder
 from ..errors import ParameterError
 from ..defaults import FALL_ANGLE, SLIP_SMOOTHING, TAYLOR_TOL
@@ -136,28 +135,21 @@ class SectionIntegrator:
 
 @functools.lru_cache(maxsize=32)
 def section_integrator(model_name: str, quantity: str, modulo: bool, direction: str, tol: float) -> SectionIntegrator:
-    """heyoka integrator with the fall event (terminal) and the section (non-terminal)."""
+    """The model's integrator (terminal event: fell) with the section and the first lift-off recorded (non-terminal
+    events), from its System."""
     import heyoka as hy
 
     model = ode.MODELS[model_name]
-    variables, sys, fall, outputs = ode.system(model)
+    system = ode.as_system(model)
+    variables, _sys, _fall, outputs = ode.system(model)
     q = _quantity_expression(model, variables, outputs, quantity)
     level = hy.par[LEVEL_INDEX]
-    g = hy.sin(q - level) if modulo else q - level
-    hy_dir = {"positive": hy.event_direction.positive, "negative": hy.event_direction.negative,
-              "any": hy.event_direction.any}[direction]
-    setup, initial = Setup(), InitialState()
-    pars = np.append(ode.parameter_vector(setup), 0.0)
-    with compiling(f"the {model.paper_name} integrator with the section {quantity}"):
-        ta = hy.taylor_adaptive(
-            sys, ode.initial_state_vector(model, setup, initial), pars=pars, tol=tol,
-            t_events=[hy.t_event(fall, direction=hy.event_direction.negative)],
-            nt_events=[hy.nt_event(g, _Recorder(), direction=hy_dir),
-                       hy.nt_event(outputs[ode.OUTPUT_NAMES.index("lambda_N")], _LiftOff(),
-                                   direction=hy.event_direction.negative)],
-        )
-        q_index = model.state_names.index(quantity) if quantity in model.state_names else None
-        return SectionIntegrator(model, ta, hy.cfunc(outputs, variables), hy.cfunc([q], variables), q_index)
+    lambda_N = outputs[ode.OUTPUT_NAMES.index("lambda_N")]
+    ta = system.taylor(tol, events=("fell",), nt_events=((hy.sin(q - level) if modulo else q - level, _Recorder(),
+                                                          direction), (lambda_N, _LiftOff(), "negative")))
+    q_index = model.state_names.index(quantity) if quantity in model.state_names else None
+    return SectionIntegrator(model, ta, system.function("outputs", outputs, f"the outputs of {model.paper_name}"),
+                             system.function(f"section {quantity}", [q]), q_index)
 
 
 @dataclass

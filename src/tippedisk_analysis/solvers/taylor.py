@@ -17,7 +17,6 @@ import heyoka as hy
 import numpy as np
 import xarray as xr
 
-from ..compilation import compiling
 from ..defaults import FALL_ANGLE, SLIP_SMOOTHING, TAYLOR_TOL
 from ..errors import IntegrationError, ParameterError
 from ..models import ode
@@ -37,19 +36,12 @@ _THREAD = threading.local()
 
 @functools.lru_cache(maxsize=None)
 def compiled(model_name: str, tol: float) -> CompiledModel:
-    """Compile (or fetch from heyoka's caches) the integrator and output function."""
+    """The model's integrator (terminal event: fell) and output function, from its System (compiled once per
+    process; heyoka's disk cache makes later processes start fast)."""
     model = ode.MODELS[model_name]
-    variables, sys, fall, outputs = ode.system(model)
-    setup, initial = Setup(), InitialState()  # placeholders; every run sets its own
-    with compiling(f"the {model.paper_name} integrator ({model_name}, tol {tol:g})"):
-        integrator = hy.taylor_adaptive(
-            sys,
-            ode.initial_state_vector(model, setup, initial),
-            pars=ode.parameter_vector(setup),
-            tol=tol,
-            t_events=[hy.t_event(fall, direction=hy.event_direction.negative)],
-        )
-        return CompiledModel(model, integrator, hy.cfunc(outputs, variables))
+    system = ode.as_system(model)
+    outputs = system.function("outputs", ode.system(model)[3], f"the outputs of {model.paper_name}")
+    return CompiledModel(model, system.taylor(tol, events=("fell",)), outputs)
 
 
 @dataclass
