@@ -34,9 +34,9 @@ import numpy as np
 from ..defaults import MAP_TOL
 from ..dynamics import attractors as at
 from ..models import ode
+from ..models.reduced import STATE_NAMES as REDUCED_NAMES
 from . import stability
 from . import stationary as st
-from .reduced import STATE_NAMES as REDUCED_NAMES
 from .reduced import full_from_reduced, reduced_from_full
 
 MODEL = ode.EULER

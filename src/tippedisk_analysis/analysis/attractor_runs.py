@@ -13,12 +13,12 @@ from ..defaults import MAP_TOL
 from ..dynamics import attractors as at
 from ..dynamics.datasets import label_coordinates, mixed_units
 from ..models import ode
+from ..models.reduced import STATE_NAMES as REDUCED_NAMES
+from ..models.reduced import STATE_UNITS
 from ..models.variables import FINAL_STATE_VARIABLES
 from . import stationary as st
 from .attractor_problem import (DEFAULT_RECURRENCE, EXTRA_NAMES, KINDS, MODEL, PROJECTION, PROJECTION_UNITS,
                                 TippediskProblem, default_grid, evaluate_observables, integrator, observables)
-from .reduced import STATE_NAMES as REDUCED_NAMES
-from .reduced import STATE_UNITS
 
 # ------------------------------------------------------------------ runs of many points (sweeps)
 MATCH_THRESHOLD = 1.0  # TippediskProblem.distance: alpha_dot cells between stable segments; cells otherwise

@@ -26,14 +26,13 @@ from ..dynamics.shooting import PeriodicOrbit, ShootingProblem
 from ..dynamics.system import System
 from ..errors import ParameterError
 from ..models import ode
+from ..models.reduced import STATE_SCALE as TIPPEDISK_SCALE
 from ..parameters import Setup, setup_from_dict, to_dict
 from ..results import index_coordinate
 from . import reduced
 
 __all__ = ["tippedisk_system", "tippedisk_orbits_from_hopf", "tippedisk_orbits_from_run", "tippedisk_lyapunov_orbit",
     "tippedisk_lyapunov_family", "tippedisk_branch_dataset", "orbit_from_dataset"]
-
-TIPPEDISK_SCALE = reduced.STATE_SCALE
 
 
 def tippedisk_system(setup: Setup | None = None) -> System:

@@ -13,54 +13,23 @@ e^(+-i theta) and invariant tori around them, as in a Hamiltonian system, althou
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass
 
-import heyoka as hy
 import numpy as np
 import xarray as xr
 
 from .. import dynamics as dy
-from ..dynamics import Event, System
 from ..errors import ParameterError
 from ..models import rolling
-from ..models.ode import Trig
-from ..models.variables import PARAMETER_UNITS
-from .reduced import STATE_UNITS
+from ..models.rolling import REDUCED_STATE_NAMES as STATE_NAMES
+from ..models.rolling import reduced_system
 
 __all__ = ["reduced_system", "spin_state", "spin_eigenvalues", "section", "identify", "Motion", "weighted_birkhoff",
     "central_orbit", "floquet_angle", "consistency", "motion_consistency", "rolling_start", "orbits_from_run",
     "family", "consistency_boundary"]
 
-STATE_NAMES = ("beta", "gamma", "omega_x", "omega_y", "omega_z")
 BRANCHES = {"noninverted": -1.0, "inverted": 1.0}  # sin(gamma) of the spin: S below / above G
-
-
-@functools.lru_cache(maxsize=None)
-def reduced_system() -> System:
-    """The rolling disk's (beta, gamma, omega) as a :class:`~tippedisk_analysis.dynamics.System` with the energy
-    E_tot as a first integral (two trivial Floquet multipliers: the flow and the energy family), observables
-    E_tot, lambda_N, cone_margin (``mu lambda_N - |lambda_T|``), alpha_dot, z_S, and the events of the rolling model
-    (fell, lift_off, slip: the cone reached)."""
-    beta, gamma, wx, wy, wz = hy.make_vars(*STATE_NAMES)
-    fall_angle = hy.par[rolling.PARAMETER_NAMES.index("fall_angle")]
-    # alpha does not enter: the frame at alpha = 0 (only the I-frame components of v_G and lambda_T need it)
-    trig = Trig(0.0 * beta, 1.0 + 0.0 * beta, hy.sin(beta), hy.cos(beta), hy.sin(gamma), hy.cos(gamma))
-    dyn = rolling.rolling_dynamics(trig, [wx, wy, wz])
-    energy = dyn.energies["E_kin"] + dyn.energies["E_pot"]
-    observables = {"E_tot": (energy, "J"), "lambda_N": (dyn.lambda_N, "N"), "cone_margin": (dyn.cone_margin, "N"),
-                   "alpha_dot": (dyn.euler_rates[0], "rad s-1"), "z_S": (dyn.z_S, "m")}
-    cone = (rolling.P["mu"] * dyn.lambda_N) ** 2 - dyn.lambda_T[0] ** 2 - dyn.lambda_T[1] ** 2
-    events = (Event("fell", hy.sin(beta) - hy.sin(fall_angle)), Event("lift_off", dyn.lambda_N), Event("slip", cone))
-    rhs = [dyn.euler_rates[1], dyn.euler_rates[2], *dyn.psi]
-    return System("tippedisk_rolling_reduced", [beta, gamma, wx, wy, wz], rhs,
-                  dict(zip(rolling.PARAMETER_NAMES, rolling.parameter_vector())), state_names=STATE_NAMES,
-                  state_scale=(1.0, 1.0, 40.0, 40.0, 40.0), observables=observables, integrals={"E_tot": energy},
-                  events=events, n_trivial=3, units={**{k: STATE_UNITS[k] for k in STATE_NAMES},
-                                                     **{k: PARAMETER_UNITS[k] for k in rolling.PARAMETER_NAMES}},
-                  time_units="s", compact_mode=True,
-                  description="the rolling tippedisk without its position and precession angle")
 
 
 def spin_state(branch: str, omega: float) -> np.ndarray:
@@ -213,7 +182,7 @@ def floquet_angle(orbit: dy.PeriodicOrbit) -> float:
 MARGIN_STEP = 1e-3  # [s] sampling of a motion for its smallest cone margin (error ~ 1e-4 N: margin'' ~ 1e3 N/s^2)
 
 
-def _smallest_margin(system: System, state, times: np.ndarray, pars) -> dict:
+def _smallest_margin(system: dy.System, state, times: np.ndarray, pars) -> dict:
     """The smallest cone margin and normal force [N] on ``times`` along the motion from ``state``, with the time
     [s] and the state where the margin is smallest."""
     X = dy.Flow(system).trajectory(np.asarray(state, dtype=float), times, system.with_pars(pars))

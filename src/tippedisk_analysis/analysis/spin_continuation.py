@@ -27,13 +27,14 @@ import numpy as np
 import xarray as xr
 
 from ..defaults import SLIP_SMOOTHING
-from ..errors import ParameterError
-from ..models import ode
-from ..parameters import Setup, to_dict
-from ..results import config_of, index_coordinate, make_attrs
 from ..dynamics import continuation
 from ..dynamics.datasets import SPECIAL_KINDS, special_point
 from ..dynamics.equilibria import EquilibriumProblem, Parameter
+from ..errors import ParameterError
+from ..models import ode
+from ..models.reduced import STATE_SCALE
+from ..parameters import Setup, to_dict
+from ..results import config_of, index_coordinate, make_attrs
 from . import reduced, stability
 from . import stationary as st
 
@@ -46,7 +47,6 @@ PARAMETERS = {  # name: (units, long_name, scale of the arclength metric, defaul
     "e": ("m", "eccentricity e (A, B, C about G held fixed)", 1e-3, (0.0, 0.01)),
     "inertia": ("1", "common scale of the inertia A, B, C about G (1: Table 2)", 1.0, (0.5, 2.0)),
 }
-STATE_SCALE = reduced.STATE_SCALE
 CLASSES = {"": 0, "elliptic": 1, "hyperbolic": 2, "repelling_node": 3, "attracting_node": 4, "supercritical": 5,
            "subcritical": 6, "degenerate": 7}
 

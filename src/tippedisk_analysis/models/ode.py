@@ -52,11 +52,13 @@ from .variables import (ORIENTATIONS, OUTPUT_NAMES, PARAMETER_NAMES, PARAMETER_U
 P = {name: hy.par[i] for i, name in enumerate(PARAMETER_NAMES)}
 
 
-def _cross(a, b):
+def cross(a, b):
+    """a x b of two 3-vectors (lists of expressions or numbers), in the frame both are given in."""
     return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 
 
-def _dot(a, b):
+def dot(a, b):
+    """a . b of two 3-vectors."""
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
@@ -143,9 +145,9 @@ def contact_dynamics(trig: Trig, r_xy, v_xy, omega, slip_norm=None, slip_directi
 
     # contact velocity (2.13): v_C = v_G + Omega x r_GC1; slip = its horizontal part (2.15)
     v_C = [v[0] + r * Omega_G[2], v[1], v[2] - r * Omega_G[0]]
-    gamma_N = _dot(v_C, ez_I)  # (2.14)
+    gamma_N = dot(v_C, ez_I)  # (2.14)
     slip = [v_C[i] - gamma_N * ez_I[i] for i in range(3)]
-    slip_squared = _dot(v_C, v_C) - gamma_N * gamma_N
+    slip_squared = dot(v_C, v_C) - gamma_N * gamma_N
     if slip_direction is None:
         norm = slip_magnitude(slip_squared, P["slip_smoothing"]) if slip_norm is None else slip_norm
         k = P["mu"] / (norm + P["eps"])  # (2.29)
@@ -154,19 +156,19 @@ def contact_dynamics(trig: Trig, r_xy, v_xy, omega, slip_norm=None, slip_directi
     else:  # set-valued Coulomb while sliding: -mu lambda_N along the slip direction
         t_G = trig.G_from_I([slip_direction[0], slip_direction[1], 0.0])
         n = [ez_I[i] - P["mu"] * t_G[i] for i in range(3)]
-        friction_power = -P["mu"] * _dot(t_G, slip)
+        friction_power = -P["mu"] * dot(t_G, slip)
 
     # Psi = psi0 + lambda_N psi1: Euler's equation about S, B-frame
     L = [theta_S[i] * omega[i] for i in range(3)]
-    gyro = _cross(omega, L)
+    gyro = cross(omega, L)
     psi0 = [-gyro[i] / theta_S[i] for i in range(3)]
-    moment = trig.B_from_G(_cross(r_SC, n))
+    moment = trig.B_from_G(cross(r_SC, n))
     psi1 = [moment[i] / theta_S[i] for i in range(3)]
     psi0_G, psi1_G = trig.G_from_B(psi0), trig.G_from_B(psi1)
 
     # a_G = aG0 + lambda_N aG1: Newton about S and the rigid body formula
-    centripetal = _cross(Omega_G, _cross(Omega_G, r_GS))
-    turn0, turn1 = _cross(psi0_G, r_GS), _cross(psi1_G, r_GS)
+    centripetal = cross(Omega_G, cross(Omega_G, r_GS))
+    turn0, turn1 = cross(psi0_G, r_GS), cross(psi1_G, r_GS)
     aG0 = [-g * ez_I[i] - turn0[i] - centripetal[i] for i in range(3)]
     aG1 = [n[i] / m - turn1[i] for i in range(3)]
 
@@ -176,13 +178,13 @@ def contact_dynamics(trig: Trig, r_xy, v_xy, omega, slip_norm=None, slip_directi
     # beta_dd = d/dt(cos(gamma) omega_x - sin(gamma) omega_y) = (A_GB Psi)_x - gamma_d W_y
     beta_dd0, beta_dd1 = psi0_G[0] - gamma_d * Omega_G[1], psi1_G[0]
     # constraint (4.9): e_z^I . a_G = r (cos(beta) beta_dd - sin(beta) beta_d^2)
-    lambda_N = (r * (cb * beta_dd0 - sb * beta_d * beta_d) - _dot(aG0, ez_I)) / (_dot(aG1, ez_I) - r * cb * beta_dd1)
+    lambda_N = (r * (cb * beta_dd0 - sb * beta_d * beta_d) - dot(aG0, ez_I)) / (dot(aG1, ez_I) - r * cb * beta_dd1)
 
     a_G = trig.I_from_G([aG0[i] + lambda_N * aG1[i] for i in range(3)])
     psi = [psi0[i] + lambda_N * psi1[i] for i in range(3)]
     slip_I = trig.I_from_G(slip)[:2]
 
-    v_S = [v[i] + c for i, c in enumerate(_cross(Omega_G, r_GS))]
+    v_S = [v[i] + c for i, c in enumerate(cross(Omega_G, r_GS))]
     z_S = r_OG[2] + e * sb * trig.sg
     return ContactDynamics(
         r_OG=r_OG,
@@ -194,7 +196,7 @@ def contact_dynamics(trig: Trig, r_xy, v_xy, omega, slip_norm=None, slip_directi
         gamma_N=gamma_N,
         friction_power=lambda_N * friction_power,
         euler_rates=[alpha_d, beta_d, gamma_d],
-        energies={"E_kin": 0.5 * m * _dot(v_S, v_S) + 0.5 * _dot(omega, L), "E_pot": m * g * z_S},
+        energies={"E_kin": 0.5 * m * dot(v_S, v_S) + 0.5 * dot(omega, L), "E_pot": m * g * z_S},
         z_S=z_S,
         g_N1=r_OG[2] - r * sb,
     )

@@ -33,9 +33,11 @@ import numpy as np
 
 from .. import kinematics as kin
 from ..defaults import FALL_ANGLE
+from ..dynamics import Event, System
 from ..parameters import InitialState
 from . import ode
-from .ode import P, Trig, _cross, _dot
+from .ode import P, Trig, cross, dot
+from .variables import PARAMETER_UNITS
 
 STATE_NAMES = ("x", "y", "alpha", "beta", "gamma", "omega_x", "omega_y", "omega_z")
 OUTPUT_NAMES = ("z", "z_dot", "x_dot", "y_dot", "alpha_dot", "beta_dot", "gamma_dot", "z_S", "g_N1", "lambda_N",
@@ -76,19 +78,19 @@ def rolling_dynamics(trig: Trig, omega) -> RollingDynamics:
     # Theta_S in G-components: the body frame turned by gamma about e_z^G
     t00, t01, t11 = A * cg * cg + B * sg * sg, (A - B) * cg * sg, A * sg * sg + B * cg * cg
     L = [t00 * W[0] + t01 * W[1], t01 * W[0] + t11 * W[1], C * W[2]]
-    b = [u - v for u, v in zip(_cross(W, _cross(W, r_GS)), _cross(W, _cross(w_G, r_GC)))]
+    b = [u - v for u, v in zip(cross(W, cross(W, r_GS)), cross(W, cross(w_G, r_GC)))]
     load = [b[i] + g * ez_I[i] for i in range(3)]
-    rhs = [-u - m * v for u, v in zip(_cross(W, L), _cross(d, load))]
+    rhs = [-u - m * v for u, v in zip(cross(W, L), cross(d, load))]
     # M = Theta_S + m (|d|^2 I - d d^T): block diagonal
     m00, m01, m11 = t00 + m * d[1] * d[1], t01 - m * d[0] * d[1], t11 + m * d[0] * d[0]
     det = m00 * m11 - m01 * m01
     psi_G = [(m11 * rhs[0] - m01 * rhs[1]) / det, (m00 * rhs[1] - m01 * rhs[0]) / det,
              rhs[2] / (C + m * (d[0] * d[0] + d[1] * d[1]))]
-    F = [m * (u + v) for u, v in zip(_cross(psi_G, d), load)]
-    lambda_N = _dot(F, ez_I)
+    F = [m * (u + v) for u, v in zip(cross(psi_G, d), load)]
+    lambda_N = dot(F, ez_I)
     lambda_T_G = [F[i] - lambda_N * ez_I[i] for i in range(3)]
     lambda_T = trig.I_from_G(lambda_T_G)[:2]
-    v_S = [v_G[i] + c for i, c in enumerate(_cross(W, r_GS))]
+    v_S = [v_G[i] + c for i, c in enumerate(cross(W, r_GS))]
     z_S = r * sb + e * sb * sg
     L_B = [P["A"] * omega[0], (P["B"] - m * e * e) * omega[1], (P["C"] - m * e * e) * omega[2]]
     return RollingDynamics(
@@ -97,8 +99,8 @@ def rolling_dynamics(trig: Trig, omega) -> RollingDynamics:
         euler_rates=[alpha_d, W[0], gamma_d],
         lambda_N=lambda_N,
         lambda_T=lambda_T,
-        cone_margin=P["mu"] * lambda_N - hy.sqrt(_dot(lambda_T_G, lambda_T_G)),
-        energies={"E_kin": 0.5 * m * _dot(v_S, v_S) + 0.5 * _dot(omega, L_B), "E_pot": m * g * z_S},
+        cone_margin=P["mu"] * lambda_N - hy.sqrt(dot(lambda_T_G, lambda_T_G)),
+        energies={"E_kin": 0.5 * m * dot(v_S, v_S) + 0.5 * dot(omega, L_B), "E_pot": m * g * z_S},
         z_S=z_S,
         g_N1=0.0 * sb,  # r sin(beta) - r sin(beta): closed by construction
     )
@@ -123,6 +125,8 @@ def system(fall_angle=P["fall_angle"]):
 
 
 PARAMETER_NAMES = ("m", "e", "r", "A", "B", "C", "gravity", "mu", "fall_angle")
+REDUCED_STATE_NAMES = ("beta", "gamma", "omega_x", "omega_y", "omega_z")
+REDUCED_STATE_UNITS = {"beta": "rad", "gamma": "rad", "omega_x": "rad s-1", "omega_y": "rad s-1", "omega_z": "rad s-1"}
 """Runtime parameters of the rolling System: those of the ODE models it uses (no eps, no slip smoothing)."""
 
 
@@ -136,9 +140,6 @@ def parameter_vector(setup=None, fall_angle: float = FALL_ANGLE) -> np.ndarray:
 def as_system():
     """The rolling model as a :class:`~tippedisk_analysis.dynamics.System` (parameters PARAMETER_NAMES;
     observables: the outputs; terminal events: fell, lift_off, and slip (the cone is reached))."""
-    from ..dynamics import Event, System
-    from .variables import PARAMETER_UNITS
-
     variables, sys, fall, outputs, cone = system(fall_angle=hy.par[PARAMETER_NAMES.index("fall_angle")])
     observables = {name: out for name, out in zip(OUTPUT_NAMES, outputs) if name != "g_N1"}
     events = (Event("fell", fall), Event("lift_off", observables["lambda_N"]), Event("slip", cone))
@@ -146,6 +147,33 @@ def as_system():
                   state_names=STATE_NAMES, observables=observables, events=events,
                   units={k: PARAMETER_UNITS[k] for k in PARAMETER_NAMES}, time_units="s",
                   description="the tippedisk rolling without slip at C1 (nonholonomic)")
+
+
+@functools.lru_cache(maxsize=None)
+def reduced_system():
+    """The rolling disk without its position and precession angle (symmetry about the vertical): (beta, gamma,
+    omega) as a :class:`~tippedisk_analysis.dynamics.System` with the energy
+    E_tot as a first integral (two trivial Floquet multipliers: the flow and the energy family), observables
+    E_tot, lambda_N, cone_margin (``mu lambda_N - |lambda_T|``), alpha_dot, z_S, and the events of the rolling model
+    (fell, lift_off, slip: the cone reached)."""
+    beta, gamma, wx, wy, wz = hy.make_vars(*REDUCED_STATE_NAMES)
+    fall_angle = hy.par[PARAMETER_NAMES.index("fall_angle")]
+    # alpha does not enter: the frame at alpha = 0 (only the I-frame components of v_G and lambda_T need it)
+    trig = Trig(0.0 * beta, 1.0 + 0.0 * beta, hy.sin(beta), hy.cos(beta), hy.sin(gamma), hy.cos(gamma))
+    dyn = rolling_dynamics(trig, [wx, wy, wz])
+    energy = dyn.energies["E_kin"] + dyn.energies["E_pot"]
+    observables = {"E_tot": (energy, "J"), "lambda_N": (dyn.lambda_N, "N"), "cone_margin": (dyn.cone_margin, "N"),
+                   "alpha_dot": (dyn.euler_rates[0], "rad s-1"), "z_S": (dyn.z_S, "m")}
+    cone = (P["mu"] * dyn.lambda_N) ** 2 - dyn.lambda_T[0] ** 2 - dyn.lambda_T[1] ** 2
+    events = (Event("fell", hy.sin(beta) - hy.sin(fall_angle)), Event("lift_off", dyn.lambda_N), Event("slip", cone))
+    rhs = [dyn.euler_rates[1], dyn.euler_rates[2], *dyn.psi]
+    return System("tippedisk_rolling_reduced", [beta, gamma, wx, wy, wz], rhs,
+                  dict(zip(PARAMETER_NAMES, parameter_vector())), state_names=REDUCED_STATE_NAMES,
+                  state_scale=(1.0, 1.0, 40.0, 40.0, 40.0), observables=observables, integrals={"E_tot": energy},
+                  events=events, n_trivial=3, units={**{k: REDUCED_STATE_UNITS[k] for k in REDUCED_STATE_NAMES},
+                                                     **{k: PARAMETER_UNITS[k] for k in PARAMETER_NAMES}},
+                  time_units="s", compact_mode=True,
+                  description="the rolling tippedisk without its position and precession angle")
 
 
 def initial_state_vector(initial: InitialState) -> np.ndarray:

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import heyoka as hy
 
-from .ode import P, Trig, _cross, contact_dynamics
+from .ode import P, Trig, contact_dynamics, cross
 
 STATE_NAMES = ("x", "y", "alpha", "beta", "gamma", "omega_x", "omega_y", "omega_z", "slip_speed", "slip_angle",
                "W_friction")
@@ -45,7 +45,7 @@ def system():
     alpha_d = W[1] / trig.sb
     w_G = [W[0], W[1], trig.cb * alpha_d]
     r_GC = [0.0, -r, 0.0]
-    turn = [u + v for u, v in zip(_cross(psi_G, r_GC), _cross(W, _cross(w_G, r_GC)))]
+    turn = [u + v for u, v in zip(cross(psi_G, r_GC), cross(W, cross(w_G, r_GC)))]
     a_C = [dyn.a_G[i] + c for i, c in enumerate(trig.I_from_G(turn))]
     along = t_I[0] * a_C[0] + t_I[1] * a_C[1]
     across = -t_I[1] * a_C[0] + t_I[0] * a_C[1]
