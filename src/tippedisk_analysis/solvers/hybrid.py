@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import math
 
-import heyoka as hy
 import numpy as np
 import xarray as xr
 
@@ -20,9 +19,8 @@ from ..defaults import FALL_ANGLE, SLIP_SMOOTHING, TAYLOR_TOL
 from ..dynamics.hybrid import HybridRun, simulate_hybrid
 from ..errors import ParameterError
 from ..models import event_driven, ode, rolling
-from ..parameters import InitialState, Setup, to_dict
-from ..results import describe, flat_parameters, make_attrs
-from .taylor import output_grid
+from ..parameters import InitialState, Setup
+from .taylor import output_grid, simulation_dataset
 
 MODES = event_driven.MODES
 MAX_SWITCHES = 10_000
@@ -111,33 +109,24 @@ def run(setup: Setup, initial: InitialState, t_end: float, *, dt_output: float =
         status, message = "nonfinite", (f"the outputs became non-finite after t = {t_final:.6g} s (extreme inputs, "
                                         "or try a smaller --tol); the dataset ends there")
     time = data.pop("time")
-    for angle in ("alpha", "gamma"):
-        data[angle] = np.unwrap(data[angle])
-    data["E_tot"] = data["E_kin"] + data["E_pot"]
     mode = data.pop("mode").astype(np.int8)
     switches = mode_switches(run)
     n_slide = sum(1 for _t, m in switches[1:] if m == "sliding")
     message += (f"; started {switches[0][1]}, then {len(switches) - 1} mode switch(es) that held longer than "
                 f"round-off, {n_slide} to sliding")
-    config = {"model": "hybrid-euler", "setup": to_dict(setup), "initial": to_dict(initial), "t_end": t_end,
-              "dt_output": dt_output, "integrator": {"name": "heyoka.taylor_adaptive", "heyoka_version": hy.__version__,
-                                                     "tol": tol, "fall_angle": fall_angle,
-                                                     "slip_smoothing": slip_smoothing, "max_switches": max_switches}}
     flags = {"flag_values": np.array(list(MODES.values()), np.int8), "flag_meanings": " ".join(MODES)}
-    variables = {name: ("time", np.asarray(v, dtype=float)) for name, v in data.items()}
-    variables["mode"] = ("time", mode, {"units": "1", "long_name": "contact mode", **flags})
-    variables["switch_time"] = ("switch", np.array([s for s, _m in switches]),
-                                {"units": "s", "long_name": "time of the mode switch (the first: the initial mode)"})
-    variables["switch_mode"] = ("switch", np.array([MODES[m] for _s, m in switches], np.int8),
-                                {"units": "1", "long_name": "mode from that time", **flags})
-    extra = {"t_final": t_final, "n_switches": len(switches) - 1, "integrator": "heyoka.taylor_adaptive", "tol": tol,
-             **flat_parameters(setup)}
-    ds = xr.Dataset(variables, coords={"time": time},
-                    attrs=make_attrs("simulation", config, status, message, model="hybrid-euler",
-                                     paper_model="event-driven Models 1/2", **extra))
+    variables = {
+        "mode": ("time", mode, {"units": "1", "long_name": "contact mode", **flags}),
+        "switch_time": ("switch", np.array([s for s, _m in switches]),
+                        {"units": "s", "long_name": "time of the mode switch (the first: the initial mode)"}),
+        "switch_mode": ("switch", np.array([MODES[m] for _s, m in switches], np.int8),
+                        {"units": "1", "long_name": "mode from that time", **flags})}
+    options = {"tol": tol, "fall_angle": fall_angle, "slip_smoothing": slip_smoothing, "max_switches": max_switches}
+    ds = simulation_dataset("hybrid-euler", "event-driven Models 1/2", setup, initial, t_end, dt_output, options, time,
+                            data, status, message, {"t_final": t_final, "n_switches": len(switches) - 1}, variables)
     for name, attrs in VARIABLE_ATTRS.items():
         ds[name].attrs.update(attrs)
-    return describe(ds)
+    return ds
 
 
 def section_crossings(setup: Setup, initial: InitialState, quantity: str, level: float, *, modulo: bool = False,

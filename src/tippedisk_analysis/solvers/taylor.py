@@ -132,35 +132,39 @@ def run(model_name: str, setup: Setup, initial: InitialState, t_end: float, *, d
     model = ode.MODELS[model_name]
     data = dict(zip(model.state_names, traj.states.T))
     data.update(zip(ode.OUTPUT_NAMES, traj.outputs))
-    for angle in ("alpha", "gamma"):  # continuous angles (the quaternion model recovers them wrapped)
-        data[angle] = np.unwrap(data[angle])
     if model is ode.QUATERNION:
         data["quaternion_norm_error"] = np.sqrt(sum(data[p] ** 2 for p in model.orientation)) - 1.0
-    data["E_tot"] = data["E_kin"] + data["E_pot"]
-    config = {
-        "model": model_name,
-        "setup": to_dict(setup),
-        "initial": to_dict(initial),
-        "t_end": t_end,
-        "dt_output": dt_output,
-        "integrator": {"name": "heyoka.taylor_adaptive", "heyoka_version": hy.__version__, "tol": tol,
-                       "fall_angle": fall_angle, "slip_smoothing": slip_smoothing},
-    }
     lam = data["lambda_N"]
-    extra = {"n_steps": traj.n_steps, "t_final": traj.t_final,
-             "lambda_N_min": float(lam.min()) if lam.size else 0.0,
-             "integrator": "heyoka.taylor_adaptive", "tol": tol, **flat_parameters(setup)}
+    attrs = {"n_steps": traj.n_steps, "t_final": traj.t_final, "lambda_N_min": float(lam.min()) if lam.size else 0.0}
     if traj.status == "fell":
-        extra["t_fell"] = traj.t_final
+        attrs["t_fell"] = traj.t_final
     message = traj.message
     if lam.size and lam.min() < 0:
         t_neg = float(traj.time[np.argmax(lam < 0)])
         message += (f"; lambda_N < 0 from t = {t_neg:.6g} s: the disk would lift off, outside the bilateral "
                     "model's validity (use a Moreau model)")
-    ds = xr.Dataset(
-        {name: ("time", np.asarray(values, dtype=float)) for name, values in data.items()},
-        coords={"time": traj.time},
-        attrs=make_attrs("simulation", config, traj.status, message, model=model_name,
-                         paper_model=model.paper_name, **extra),
-    )
+    options = {"tol": tol, "fall_angle": fall_angle, "slip_smoothing": slip_smoothing}
+    return simulation_dataset(model_name, model.paper_name, setup, initial, t_end, dt_output, options, traj.time,
+                              data, traj.status, message, attrs)
+
+
+def simulation_dataset(model_name: str, paper_model: str, setup: Setup, initial: InitialState, t_end: float,
+                       dt_output: float, options: dict, time: np.ndarray, data: dict, status: str, message: str,
+                       attrs: dict, variables: dict | None = None) -> xr.Dataset:
+    """The dataset of every Taylor-integrated run of the disk (ODE Models 1/2, hybrid-euler): the columns ``data``
+    (states and outputs along ``time``; alpha and gamma made continuous, E_tot added), ``variables`` of the
+    model's own (e.g. the contact mode), the config (with the integrator ``options``: tol, fall_angle, ...) and
+    the attributes of results.py plus ``attrs``."""
+    data = dict(data)
+    for angle in ("alpha", "gamma"):  # continuous angles (the quaternion model recovers them wrapped)
+        data[angle] = np.unwrap(data[angle])
+    data["E_tot"] = data["E_kin"] + data["E_pot"]
+    config = {"model": model_name, "setup": to_dict(setup), "initial": to_dict(initial), "t_end": t_end,
+              "dt_output": dt_output,
+              "integrator": {"name": "heyoka.taylor_adaptive", "heyoka_version": hy.__version__, **options}}
+    columns = {name: ("time", np.asarray(values, dtype=float)) for name, values in data.items()}
+    ds = xr.Dataset({**columns, **(variables or {})}, coords={"time": time},
+                    attrs=make_attrs("simulation", config, status, message, model=model_name, paper_model=paper_model,
+                                     **attrs, integrator="heyoka.taylor_adaptive", tol=options["tol"],
+                                     **flat_parameters(setup)))
     return describe(ds)
