@@ -139,8 +139,7 @@ def bifurcation_diagram(omega, *, quantity: str = "gamma", section: str = "beta_
     crossings = max_crossings if max_crossings is not None else 100 * (t_end - t_transient)
     sweep = sweeps.Sweep("bifurcation diagram", config, _n_omega(config), int(chunk_size), (*PER_OMEGA, *PER_CROSSING),
                          run_chunk, functools.partial(_assemble, config, sec),
-                         functools.partial(poincare.section_integrator, model.name, sec.quantity, sec.modulo,
-                                           sec.direction, float(tol)),
+                         functools.partial(poincare.compile_section, model.name, sec, float(tol)),
                          unit="Omega value", bytes_per_point=10 + 8 + 40 * crossings,
                          seconds_per_point=SECONDS_PER_RUN_SECOND * t_end)
     return sweeps.run_sweep(sweep, output=output, scheduler=scheduler, threads=threads, progress=progress,

@@ -11,7 +11,6 @@ the reason. Without friction (mu = 0) the disk is conservative and families of o
 
 from __future__ import annotations
 
-import copy
 import math
 
 import numpy as np
@@ -242,8 +241,6 @@ def tippedisk_full_model_check(orbit: PeriodicOrbit, setup, *, tol: float = TAYL
     (:func:`.reduced.full_from_reduced`) integrated over one period returns to the orbit (``return_error``:
     max |x(T) - x_0| / scale of the reduced states), and the period equals the return time of the section
     crossings located by :mod:`.poincare`'s event integrator (``section_period``)."""
-    import heyoka as hy
-
     from ..defaults import FALL_ANGLE, SLIP_SMOOTHING
     from ..solvers import taylor
     from . import poincare
@@ -257,21 +254,12 @@ def tippedisk_full_model_check(orbit: PeriodicOrbit, setup, *, tol: float = TAYL
                                    end["omega_x"], end["omega_y"], end["omega_z"])[:, 0]
     error = float(np.max(np.abs(x1 - x0) / np.asarray(TIPPEDISK_SCALE)))
     sec = poincare.parse_section(section)
-    si = poincare.section_integrator("ode-euler", sec.quantity, sec.modulo, sec.direction, float(tol))
-    ta = copy.copy(si.integrator)
-    pars = np.append(ode.parameter_vector(setup), sec.level)
-    ta.pars[:] = pars
-    ta.time = 0.0
-    ta.state[:] = full0
-    ta.reset_cooldowns()
-    rec = ta.nt_events[0].callback
-    rec.t_transient, rec.level, rec.modulo, rec.times, rec.states = 0.0, sec.level, sec.modulo, [], []
-    ta.propagate_until(2.5 * orbit.period)
-    times = np.array(rec.times)
-    if ta.time < 2.5 * orbit.period or len(times) < 2:
+    cr = poincare.crossings(sec, setup=setup, initial=full0, t_end=2.5 * orbit.period, tol=tol)
+    times = cr.times
+    if cr.t_final < 2.5 * orbit.period or len(times) < 2:
         raise ParameterError(f"the orbit crosses {section} fewer than twice in 2.5 periods; choose another section")
     return {"return_error": error, "section_period": float(times[1] - times[0]), "section_times": times,
-            "period": orbit.period, "outcome": str(hy.taylor_outcome.time_limit)}
+            "period": orbit.period, "outcome": cr.status}
 
 
 def tippedisk_lyapunov_family(setup, branch: str = "inverted", omega: float = 40.0, energy_max: float | None = None,

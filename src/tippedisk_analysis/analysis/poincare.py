@@ -20,8 +20,6 @@ the section holds to about the integrator tolerance.
 from __future__ import annotations
 
 import ast
-import copy
-import functools
 import math
 import operator
 from dataclasses import dataclass
@@ -29,7 +27,8 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from ..dynamics.poincare import Recorder as _Recorder
+from ..dynamics.poincare import crossings as generic_crossings
+from ..dynamics.poincare import section_template
 from ..errors import ParameterError
 from ..defaults import FALL_ANGLE, SLIP_SMOOTHING, TAYLOR_TOL
 from ..models import ode
@@ -107,49 +106,13 @@ def parse_section(spec: str, direction: str = "positive", model_name: str = "ode
     return Section(name, parse_level(level), modulo, direction)
 
 
-def _quantity_expression(model: ode.OdeModel, variables, outputs, name: str):
-    if name in model.state_names:
-        return variables[model.state_names.index(name)]
-    return outputs[ode.OUTPUT_NAMES.index(name)]
+LIFT_OFF = {"lift_off": ("lambda_N", "negative")}  # watched, not terminal: the first time the contact would open
 
 
-class _LiftOff:
-    """nt_event callback: the first time lambda_N falls through 0 (the contact would open)."""
-
-    def __init__(self):
-        self.time = None
-
-    def __call__(self, ta, time, d_sign):
-        if self.time is None:
-            self.time = float(time)
-
-
-@dataclass(frozen=True)
-class SectionIntegrator:
-    model: ode.OdeModel
-    integrator: object
-    outputs: object  # cfunc of ode.OUTPUT_NAMES
-    quantity: object  # cfunc of [q]
-    q_index: int | None
-
-
-@functools.lru_cache(maxsize=32)
-def section_integrator(model_name: str, quantity: str, modulo: bool, direction: str, tol: float) -> SectionIntegrator:
-    """The model's integrator (terminal event: fell) with the section and the first lift-off recorded (non-terminal
-    events), from its System."""
-    import heyoka as hy
-
-    model = ode.MODELS[model_name]
-    system = ode.as_system(model)
-    variables, _sys, _fall, outputs = ode.system(model)
-    q = _quantity_expression(model, variables, outputs, quantity)
-    level = hy.par[LEVEL_INDEX]
-    lambda_N = outputs[ode.OUTPUT_NAMES.index("lambda_N")]
-    ta = system.taylor(tol, events=("fell",), nt_events=((hy.sin(q - level) if modulo else q - level, _Recorder(),
-                                                          direction), (lambda_N, _LiftOff(), "negative")))
-    q_index = model.state_names.index(quantity) if quantity in model.state_names else None
-    return SectionIntegrator(model, ta, system.function("outputs", outputs, f"the outputs of {model.paper_name}"),
-                             system.function(f"section {quantity}", [q]), q_index)
+def compile_section(model_name: str, section: Section, tol: float):
+    """The compiled section integrator of ``model_name`` (for a sweep's workers to load before they run)."""
+    return section_template(ode.as_system(ode.MODELS[model_name]), section.quantity, direction=section.direction,
+                            modulo=section.modulo, tol=float(tol), events=("fell",), watch=LIFT_OFF)
 
 
 @dataclass
@@ -164,52 +127,34 @@ class Crossings:
 
 
 def crossings(section: Section, *, model_name: str = "ode-euler", setup: Setup | None = None,
-              initial: InitialState | None = None, t_transient: float = 0.0, t_end: float = 10.0,
+              initial: InitialState | np.ndarray | None = None, t_transient: float = 0.0, t_end: float = 10.0,
               max_crossings: int | None = None, tol: float = TAYLOR_TOL, fall_angle: float = FALL_ANGLE,
               slip_smoothing: float = SLIP_SMOOTHING) -> Crossings:
-    """Integrate from the initial state and collect the section crossings (raw arrays)."""
-    import heyoka as hy
-
+    """The section's crossings by the ODE model's run from ``initial`` (an InitialState, or a full state vector of
+    the model): the generic section of the model's System (:func:`tippedisk_analysis.dynamics.poincare.crossings`)
+    with the fall terminal and the lift-off watched."""
     _check(t_transient, t_end, max_crossings, tol, fall_angle)
-    setup, initial = setup or Setup(), initial or InitialState()
-    si = section_integrator(model_name, section.quantity, section.modulo, section.direction, float(tol))
-    ta = copy.copy(si.integrator)
-    pars = np.append(ode.parameter_vector(setup, fall_angle, slip_smoothing), section.level)
-    ta.pars[:] = pars
-    ta.time = 0.0
-    ta.state[:] = ode.initial_state_vector(si.model, setup, initial)
-    ta.reset_cooldowns()
-    rec, lift_off = (event.callback for event in ta.nt_events)
-    lift_off.time = None
-    rec.t_transient, rec.level, rec.modulo = float(t_transient), section.level, section.modulo
-    rec.q_index, rec.q_func, rec.pars = si.q_index, si.quantity, pars[: si.quantity.nparams]
-
-    step_cb = None
-    if max_crossings is not None:
-        def step_cb(_ta):
-            return len(rec.times) < max_crossings
-    outcome, _, _, n_steps, *_ = ta.propagate_until(float(t_end), callback=step_cb)
-    times, states = np.array(rec.times), np.array(rec.states).reshape(-1, len(si.model.state_names))
-    if max_crossings is not None:
-        times, states = times[:max_crossings], states[:max_crossings]
-    n = len(times)
-    if outcome == hy.taylor_outcome.time_limit:
-        status, message = "completed", f"reached t_end = {t_end:g} s with {n} crossing(s)"
-    elif max_crossings is not None and n >= max_crossings and outcome == hy.taylor_outcome.cb_stop:
-        status, message = "completed", f"collected {n} crossing(s) by t = {ta.time:.6g} s"
-    elif int(outcome) == -1:
-        status = "fell"
-        message = (f"the disk fell (tilt down to {fall_angle:g} rad) at t = {ta.time:.6g} s "
-                   f"after {n} crossing(s)")
+    setup, initial = setup or Setup(), initial if initial is not None else InitialState()
+    model = ode.MODELS[model_name]
+    x0 = initial if isinstance(initial, np.ndarray) else ode.initial_state_vector(model, setup, initial)
+    cr = generic_crossings(ode.as_system(model), x0, section.quantity, section.level,
+                           pars=ode.parameter_vector(setup, fall_angle, slip_smoothing), direction=section.direction,
+                           modulo=section.modulo, t_end=t_end, transient=t_transient, max_crossings=max_crossings,
+                           tol=tol, events=("fell",), watch=LIFT_OFF)
+    n = len(cr.times)
+    if cr.status == "completed" and cr.t_final < t_end:
+        message = f"collected {n} crossing(s) by t = {cr.t_final:.6g} s"
+    elif cr.status == "completed":
+        message = f"reached t_end = {t_end:g} s with {n} crossing(s)"
+    elif cr.status == "fell":
+        message = f"the disk fell (tilt down to {fall_angle:g} rad) at t = {cr.t_final:.6g} s after {n} crossing(s)"
     else:
-        status = "nonfinite"
-        message = f"integration stopped ({outcome!r}) at t = {ta.time:.6g} s; try a smaller tol"
-        keep = np.all(np.isfinite(states), axis=1)
-        times, states = times[keep], states[keep]
-    if lift_off.time is not None:
-        message += (f"; lambda_N < 0 from t = {lift_off.time:.6g} s: the disk would lift off, outside the bilateral "
+        message = f"integration stopped at t = {cr.t_final:.6g} s; try a smaller tol"
+    lift_off = cr.first["lift_off"]
+    if lift_off is not None:
+        message += (f"; lambda_N < 0 from t = {lift_off:.6g} s: the disk would lift off, outside the bilateral "
                     "model's validity")
-    return Crossings(times, states, status, message, float(ta.time), int(n_steps), lift_off.time)
+    return Crossings(cr.times, cr.states, cr.status, message, cr.t_final, cr.n_steps, lift_off)
 
 
 def _check(t_transient, t_end, max_crossings, tol, fall_angle) -> None:
@@ -236,7 +181,7 @@ def poincare_section(section: str | Section = "beta_dot=0", *, direction: str = 
     crossings after ``t_transient`` [s], or the fall, whichever comes first. Holds the time,
     the full state and the outputs (Euler rates, z_S, energies, ...) at each crossing.
     """
-    from ..solvers import resolve, taylor
+    from ..solvers import resolve
 
     model_name = resolve(model).name
     if model_name == "hybrid-euler":
@@ -252,12 +197,11 @@ def poincare_section(section: str | Section = "beta_dot=0", *, direction: str = 
                    t_end=t_end, max_crossings=max_crossings, tol=tol, fall_angle=fall_angle,
                    slip_smoothing=slip_smoothing)
     m = ode.MODELS[model_name]
-    si = section_integrator(model_name, sec.quantity, sec.modulo, sec.direction, float(tol))
     pars = ode.parameter_vector(setup, fall_angle, slip_smoothing)
-    outs = taylor.evaluate_outputs(si.outputs, cr.states, pars)
     data = dict(zip(m.state_names, cr.states.T))
-    for name, values in zip(ode.OUTPUT_NAMES, outs):
-        data.setdefault(name, values)
+    observed = ode.as_system(m).observe(cr.states.T, pars) if len(cr.times) else {}
+    for name in ode.OUTPUT_NAMES:
+        data.setdefault(name, observed.get(name, np.empty(0)))
     run = {"setup": setup, "initial": initial, "t_transient": t_transient, "t_end": t_end,
            "max_crossings": max_crossings, "tol": tol, "fall_angle": fall_angle, "slip_smoothing": slip_smoothing}
     ds = _section_dataset(sec, model_name, m.paper_name, cr.times, data, cr.status, cr.message, run,

@@ -233,7 +233,7 @@ def _configure_recorder(rec: Recorder, system: System, section: dict, pars: np.n
         rec.q_index = system.state_index(section["quantity"])
     elif rec.modulo:
         rec.q_func = system.function("section", [section_quantity(system, section["quantity"])])
-        rec.pars = pars
+        rec.pars = pars[: rec.q_func.nparams]
 
 
 def _leave_zeros(hybrid: HybridSystem, mode: str, t: float, x: np.ndarray, pars, tol: float, grid):

@@ -42,11 +42,25 @@ class Recorder:
         ta.update_d_output(time)
         state = np.array(ta.d_output, copy=True)
         if self.modulo:
-            q = state[self.q_index] if self.q_index is not None else float(self.q_func(state, pars=self.pars)[0])
+            if self.q_index is not None:
+                q = state[self.q_index]
+            else:
+                q = float((self.q_func(state, pars=self.pars) if self.q_func.nparams else self.q_func(state))[0])
             if math.cos(q - self.level) <= 0.0:
                 return
         self.times.append(float(time))
         self.states.append(state)
+
+
+class FirstCrossing:
+    """nt_event callback: the time of the first crossing (None: none yet)."""
+
+    def __init__(self):
+        self.time = None
+
+    def __call__(self, ta, time, d_sign):
+        if self.time is None:
+            self.time = float(time)
 
 
 @dataclass
@@ -56,6 +70,8 @@ class Crossings:
     status: str
     message: str
     t_final: float
+    n_steps: int = 0
+    first: dict | None = None  # {watched name: time of its first crossing, or None}
 
 
 def _quantity(system: System, name: str):
@@ -67,50 +83,66 @@ def _quantity(system: System, name: str):
                          f"one of {', '.join((*system.state_names, *system.observables))}")
 
 
-def crossings(system: System, state, quantity: str, level: float = 0.0, *, pars=None, direction: str = "positive",
-              modulo: bool = False, t_end: float = 100.0, transient: float = 0.0, max_crossings: int | None = None,
-              tol: float = 1e-12) -> Crossings:
-    """Integrate from ``state`` and collect the crossings of ``quantity`` = ``level`` (raw arrays)."""
+def section_template(system: System, quantity: str, *, direction: str = "positive", modulo: bool = False,
+                     tol: float = 1e-12, events=True, watch: dict | None = None):
+    """The compiled integrator template of a section (the level is the runtime parameter after the system's):
+    terminal ``events`` (True: all of the system's, or their names), the section's recorder and a
+    :class:`FirstCrossing` per ``watch`` {name: (quantity, direction)} (non-terminal)."""
     if direction not in DIRECTIONS:
         raise ParameterError(f"direction {direction!r} unknown; give one of {', '.join(DIRECTIONS)}")
+    q = _quantity(system, quantity)
+    level = hy.par[len(system.parameter_names)]
+    nt = [(hy.sin(q - level) if modulo else q - level, Recorder(), direction)]
+    nt += [(_quantity(system, what), FirstCrossing(), way) for what, way in (watch or {}).values()]
+    return system.taylor(tol, events=events, nt_events=tuple(nt))
+
+
+def crossings(system: System, state, quantity: str, level: float = 0.0, *, pars=None, direction: str = "positive",
+              modulo: bool = False, t_end: float = 100.0, transient: float = 0.0, max_crossings: int | None = None,
+              tol: float = 1e-12, events=True, watch: dict | None = None) -> Crossings:
+    """Integrate from ``state`` and collect the crossings of ``quantity`` = ``level`` (raw arrays); the run ends at
+    ``t_end``, after ``max_crossings``, or at one of the terminal ``events`` (True: all the system's, or their
+    names; the status is its name). ``watch`` {name: (quantity, direction)}: the first crossing of each (in
+    ``Crossings.first``), without ending the run."""
     if not (math.isfinite(t_end) and t_end > 0 and math.isfinite(transient) and 0 <= transient < t_end):
         raise ParameterError(f"give t_end > 0 and 0 <= transient < t_end (got {t_end!r}, {transient!r})")
     if max_crossings is not None and (int(max_crossings) != max_crossings or max_crossings < 1):
         raise ParameterError(f"max_crossings = {max_crossings!r} must be a positive integer")
-    q = _quantity(system, quantity)
-    n_pars = len(system.parameter_names)
-    g = hy.sin(q - hy.par[n_pars]) if modulo else q - hy.par[n_pars]
-    template = system.taylor(tol, events=True, nt_events=((g, Recorder(), direction),))
-    ta = copy.copy(template)
+    watch = dict(watch or {})
+    ta = copy.copy(section_template(system, quantity, direction=direction, modulo=modulo, tol=tol, events=events,
+                                    watch=watch))
     pars = np.append(system.with_pars(pars), float(level))
     ta.pars[:] = pars[: len(ta.pars)]
     ta.time = 0.0
     ta.state[:] = np.asarray(state, dtype=float)
     ta.reset_cooldowns()
-    rec = ta.nt_events[0].callback
+    rec, *watchers = (event.callback for event in ta.nt_events)
     rec.t_transient, rec.level, rec.modulo, rec.times, rec.states = float(transient), float(level), modulo, [], []
     if modulo and quantity in system.state_names:
         rec.q_index = system.state_index(quantity)
     elif modulo:
-        rec.q_func, rec.pars = hy.cfunc([q], list(system.variables)), pars[:n_pars]
+        rec.q_func = system.function(f"section {quantity}", [_quantity(system, quantity)])
+        rec.pars = pars[: rec.q_func.nparams]
     stop = None if max_crossings is None else (lambda _ta: len(rec.times) < max_crossings)
-    outcome = ta.propagate_until(float(t_end), callback=stop)[0]
+    outcome, _h_min, _h_max, n_steps, *_ = ta.propagate_until(float(t_end), callback=stop)
     times, states = np.array(rec.times), np.array(rec.states).reshape(-1, system.n)
     if max_crossings is not None:
         times, states = times[:max_crossings], states[:max_crossings]
     n = len(times)
+    ended = system.terminal_events(events)
     if outcome == hy.taylor_outcome.time_limit:
         status, message = "completed", f"reached t_end = {t_end:g} with {n} crossing(s)"
     elif outcome == hy.taylor_outcome.cb_stop:
         status, message = "completed", f"collected {n} crossing(s) by t = {ta.time:.6g}"
-    elif -len(system.events) <= int(outcome) <= -1:
-        status = system.events[-int(outcome) - 1].name
+    elif -len(ended) <= int(outcome) <= -1:
+        status = ended[-int(outcome) - 1].name
         message = f"ended at t = {ta.time:.6g} ({status}) after {n} crossing(s)"
     else:
         keep = np.all(np.isfinite(states), axis=1)
         times, states = times[keep], states[keep]
         status, message = "nonfinite", f"the integration stopped ({outcome!r}) at t = {ta.time:.6g}; try a smaller tol"
-    return Crossings(times, states, status, message, float(ta.time))
+    first = {name: w.time for name, w in zip(watch, watchers)}
+    return Crossings(times, states, status, message, float(ta.time), int(n_steps), first)
 
 
 def poincare_section(system: System, state, quantity: str, level: float = 0.0, *, pars=None,

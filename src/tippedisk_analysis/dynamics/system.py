@@ -348,7 +348,7 @@ class System:
         """
         indices = tuple(i if isinstance(i, int) else self.parameter_index(i) for i in parameters)
         extra, nt_events = tuple(extra), tuple(nt_events)
-        t_events = self._events(events)
+        t_events = self.terminal_events(events)
         compact = self.compact_mode if compact_mode is None else bool(compact_mode)
         key = ("taylor", float(tol), int(batch), int(tangents), indices, tuple(e.name for e in t_events),
                tuple((str(x), type(c).__name__, d) for x, c, d in nt_events), tuple(map(str, extra)), compact)
@@ -380,7 +380,7 @@ class System:
         what = "the " + ("batch " if batch else "") + ("variational " if tangents or indices else "") + "integrator"
         return self._cached(key, what, build)
 
-    def _events(self, events) -> tuple:
+    def terminal_events(self, events) -> tuple:
         """The terminal events an integrator gets: True (all), False (none) or their names in order."""
         if events is True:
             return self.events

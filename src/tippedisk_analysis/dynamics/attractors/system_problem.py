@@ -55,7 +55,7 @@ class SystemProblem(Problem):
     def __init__(self, system: System, grid: Grid, *, tol: float = TOL, events=True):
         self.system, self.grid, self.tol = system, grid, float(tol)
         self.state_names = system.state_names
-        self._events = tuple(e.name for e in system._events(events))
+        self._events = tuple(e.name for e in system.terminal_events(events))
         self.terminal_labels = self._events
         self.kinds = BASE_KINDS
         for name in grid.names:
