@@ -28,14 +28,14 @@ import xarray as xr
 
 from ..defaults import SLIP_SMOOTHING
 from ..dynamics import continuation
-from ..dynamics.datasets import SPECIAL_KINDS, special_point
+from ..dynamics.datasets import continuation_dataset, special_point
 from ..dynamics.equilibria import EquilibriumProblem, Parameter
 from ..errors import ParameterError
 from ..models import ode
 from ..models.reduced import STATE_SCALE
 from ..parameters import Setup, to_dict
-from ..results import config_of, index_coordinate, make_attrs
-from . import reduced, stability
+from ..results import config_of
+from . import reduced
 from . import stationary as st
 
 __all__ = ["continue_branch", "continue_curve", "continue_from_point"]
@@ -187,66 +187,35 @@ def _setup_with(setup: Setup, values: dict) -> Setup:
 
 
 def branch_dataset(br: continuation.Branch, prob: EquilibriumProblem, setup: Setup, info: dict) -> xr.Dataset:
-    """The branch as a dataset of kind "continuation" (dims point, eig, special_point)."""
+    """The branch as a dataset of kind "continuation": the generic schema of every System's branch
+    (:func:`tippedisk_analysis.dynamics.datasets.continuation_dataset`) with the tippedisk's columns added: the
+    continuation parameters of PARAMETERS along the branch (Omega, inertia, ...), lambda_N, and the normal-form
+    table of the special points."""
+    system = prob.system
     u = br.array("u")
-    n = reduced.N_STATE
-    ev = np.array([p.eigenvalues for p in br.points])
-    stab, n_unstable, max_re = stability.classify(ev)
-    pars = [prob.runtime(ui) for ui in u]
-    lam = np.array([reduced.evaluate(ui[:n], pi)["lambda_N"][0] for ui, pi in zip(u, pars)])
-    residual = np.array([np.max(np.abs(reduced.evaluate(ui[:n], pi)["rhs"][:, 0])) for ui, pi in zip(u, pars)])
-    values = {name: _values_along(name, u, prob, setup) for name in PARAMETERS}
-    data = {
-        **{name: ("point", values[name], {"units": PARAMETERS[name][0], "long_name": PARAMETERS[name][1]})
-           for name in PARAMETERS},
-        **{name: ("point", u[:, i]) for i, name in enumerate(reduced.STATE_NAMES)},
-        "eig_real": (("point", "eig"), ev.real, {"units": "s-1", "long_name": "real part of the nontrivial "
-                                                  "eigenvalues (spin-family zero deflated), descending"}),
-        "eig_imag": (("point", "eig"), ev.imag, {"units": "rad s-1", "long_name": "imaginary part of the "
-                                                  "nontrivial eigenvalues"}),
-        "n_unstable": ("point", n_unstable.astype(np.int32), {"units": "1", "long_name": "eigenvalues with "
-                                                                "positive real part"}),
-        "stability": ("point", stab, {"long_name": "linear stability",
-                                      "flag_values": np.array(list(stability.STABILITY_FLAGS.values()), np.int8),
-                                      "flag_meanings": " ".join(stability.STABILITY_FLAGS)}),
-        "max_real_eig": ("point", max_re, {"units": "s-1", "long_name": "largest real part of the nontrivial "
-                                            "eigenvalues"}),
-        "arclength": ("point", br.array("arclength"), {"units": "1", "long_name": "pseudo-arclength in scaled "
-                                                        "unknowns (u / scale)"}),
-        "lambda_N": ("point", lam, {"units": "N", "long_name": "normal force at C1"}),
-        "residual": ("point", residual, {"units": "1", "long_name": "max |rhs| of the reduced system (mixed units)"}),
-        "newton_iterations": ("point", br.array("newton_iterations").astype(np.int32),
-                              {"units": "1", "long_name": "corrector iterations"}),
-    }
-    if prob.critical == "hopf":
-        kappa = [float(np.prod(p.eigenvalues[prob._critical_indices(p.eigenvalues)]).real) for p in br.points]
-        data["critical_product"] = ("point", np.array(kappa), {
-            "units": "s-2", "long_name": "product of the critical pair of eigenvalues",
-            "comment": "omega^2 > 0 on the Hopf curve; < 0 on its continuation beyond a Bogdanov-Takens point, "
-                       "a neutral saddle (a real pair s, -s: no bifurcation)"})
-    data.update(_special_table(br, prob, setup))
-    ds = xr.Dataset(data, coords={
-        "point": index_coordinate("point", len(u), "point along the branch"),
-        "eig": index_coordinate("eig", ev.shape[1], "eigenvalue index"),
-        "special_point": index_coordinate("special_point", len(br.special_points), "special point index")})
+    n = prob.n
+    pars = np.array([prob.runtime(ui) for ui in u])
+    ds = continuation_dataset(br, prob, {"setup": to_dict(setup), **info, "slip_smoothing": float(
+        prob.pars[ode.PARAMETER_NAMES.index("slip_smoothing")]), "heyoka_version": hy.__version__})
+    for name in PARAMETERS:
+        ds[name] = ("point", _values_along(name, u, prob, setup),
+                    {"units": PARAMETERS[name][0], "long_name": PARAMETERS[name][1]})
+    lam = np.array([system.observe(ui[:n], pi)["lambda_N"] for ui, pi in zip(u, pars)]).reshape(len(u))
+    ds["lambda_N"] = ("point", lam, {"units": "N", "long_name": "normal force at C1"})
+    ds["eig_real"].attrs["long_name"] = "real part of the nontrivial eigenvalues (spin-family zero deflated), descending"
+    ds["eig_imag"].attrs["long_name"] = "imaginary part of the nontrivial eigenvalues"
+    for name, variable in _special_table(br).items():
+        ds[name] = variable
     for name in reduced.STATE_NAMES:
         ds[name].attrs.update(_STATE_ATTRS[name])
-    config = {"setup": to_dict(setup), **info, "critical": prob.critical or "", "free": [p.name for p in prob.free],
-              "bounds": {prob.free[i - prob.n].name: list(b) for i, b in prob.bounds.items()},
-              "options": dataclasses.asdict(br.options), "slip_smoothing": float(prob.pars[
-                  ode.PARAMETER_NAMES.index("slip_smoothing")]), "heyoka_version": hy.__version__}
-    labels = ", ".join(f"{sp.label} at " + ", ".join(f"{p.name} = {sp.u[prob.n + j]:.8g}" for j, p in
+    labels = ", ".join(f"{sp.label} at " + ", ".join(f"{p.name} = {sp.u[n + j]:.8g}" for j, p in
                                                        enumerate(prob.free)) for sp in br.special_points)
     what = ("curve of " + {"hopf": "Hopf", "zero": "zero-eigenvalue"}[prob.critical] + " points") \
         if prob.critical else f"{info.get('branch', '')} branch"
-    message = f"{what}: {len(u)} points; {br.message}" + (f"; {labels}" if labels else "")
-    ds.attrs = make_attrs("continuation", config, br.status, message,
-                          title="Continuation of the stationary spinning solutions of the tippedisk",
-                          model="ode-euler", paper_model="ODE Model 1 (reduced by the rotational symmetry)",
-                          parameters=" ".join(p.name for p in prob.free), critical=prob.critical or "equilibria",
-                          labels=" ".join(sp.label for sp in br.special_points))
+    ds.attrs.update(message=f"{what}: {len(u)} points; {br.message}" + (f"; {labels}" if labels else ""),
+                    title="Continuation of the stationary spinning solutions of the tippedisk", model="ode-euler",
+                    paper_model="ODE Model 1 (reduced by the rotational symmetry)")
     return ds
-
 
 _STATE_ATTRS = {
     "beta": {"units": "rad", "long_name": "Euler angle beta"},
@@ -268,27 +237,18 @@ def _values_along(name: str, u: np.ndarray, prob: EquilibriumProblem, setup: Set
     return np.full(len(u), base_value(name, setup))
 
 
-def _special_table(br, prob, setup) -> dict:
+def _special_table(br) -> dict:
+    """The tippedisk's normal-form columns of the special points (the generic table has kind, label, index,
+    value, frequency, l1)."""
     sps = br.special_points
-    keys = ("frequency", "a", "b", "c", "k", "l1")
+    keys = ("a", "b", "c", "k", "l1")
     table = {k: np.array([float(sp.data.get(k, 0.0)) for sp in sps]) for k in keys}
     return {
-        "special_kind": ("special_point", np.array([SPECIAL_KINDS[sp.kind] for sp in sps], dtype=np.int8),
-                         {"long_name": "type of the special point", "flag_values": np.array(
-                             list(SPECIAL_KINDS.values()), np.int8), "flag_meanings": " ".join(SPECIAL_KINDS)}),
         "special_label": ("special_point", np.array([sp.label for sp in sps], dtype=str),
                           {"long_name": "label, e.g. HOPF1 (tippedisk continue --from-point FILE:LABEL)"}),
-        "special_index": ("special_point", np.array([sp.index for sp in sps], dtype=np.int32),
-                          {"units": "1", "long_name": "index of the special point along dim point"}),
-        "special_value": ("special_point", np.array([sp.value for sp in sps]),
-                          {"long_name": "test function at the located point: the critical eigenvalue's real part "
-                                        "[1/s] for Hopf and zero-eigenvalue points, the tangent component for folds, "
-                                        "the codimension-two test's own units otherwise"}),
         "special_class": ("special_point", np.array([CLASSES[sp.data.get("class", "")] for sp in sps], np.int8),
                           {"long_name": "normal-form class", "flag_values": np.array(list(CLASSES.values()), np.int8),
                            "flag_meanings": " ".join(k or "none" for k in CLASSES)}),
-        "special_frequency": ("special_point", table["frequency"], {"units": "rad s-1", "long_name":
-                              "frequency |Im s| of the critical pair (Hopf), 0 otherwise"}),
         "special_a": ("special_point", table["a"], {"long_name": "normal-form coefficient a = d Re s / d Omega along "
                                                     "the line of equilibria (s = Omega - Omega_c)", "units": "rad-1"}),
         "special_b": ("special_point", table["b"], {"long_name": "normal-form coefficient b: drift of the spin rate, "

@@ -108,6 +108,13 @@ def continuation_dataset(br: Branch, prob, info: dict | None = None) -> xr.Datas
         "newton_iterations": ("point", br.array("newton_iterations").astype(np.int32),
                               {"units": "1", "long_name": "corrector iterations"}),
     })
+    if prob.critical == "hopf":
+        kappa = [float(np.prod(p.eigenvalues[prob._critical_indices(p.eigenvalues)]).real) for p in br.points]
+        data["critical_product"] = ("point", np.array(kappa), {
+            "units": f"{system.time_units}-2" if system.time_units != "1" else "1",
+            "long_name": "product of the critical pair of eigenvalues",
+            "comment": "omega^2 > 0 on the Hopf curve; < 0 on its continuation beyond a Bogdanov-Takens point, "
+                       "a neutral saddle (a real pair s, -s: no bifurcation)"})
     data.update(special_table(br, system))
     ds = xr.Dataset(data, coords={
         "point": index_coordinate("point", len(u), "point along the branch"),
