@@ -109,7 +109,8 @@ def test_stick_slip_segments_in_closed_form():
     expected = np.cumsum([t_slip, t_stick] * 3)[:5]
     assert np.abs(times - expected).max() < 1e-12
     assert np.allclose([s.after[0] for s in run.switches], [2 * FD - FS, FS] * 2 + [2 * FD - FS], atol=1e-12)
-    legs = dy.legs_from_run(run, 2)
+    legs = dy.legs_from_run(run)  # the cycle found from the run: stick, then slip
+    assert [leg.mode for leg in legs] == ["stick", "slip_back"]
     orbit = dy.find_hybrid_orbit(system, legs)
     assert orbit.status == "converged", orbit.message
     assert orbit.period == pytest.approx(t_slip + t_stick, rel=1e-13)
@@ -165,7 +166,8 @@ def test_relay_filippov_sliding_segment_and_orbit():
     entry, leave = (last[0], last[1]) if last[0].target == "sliding" else (last[1], None)
     assert leave is not None and leave.time - entry.time == pytest.approx(t_stick, rel=1e-10)
     assert entry.before[0] == pytest.approx(x_return, abs=1e-10)
-    orbit = dy.find_hybrid_orbit(system, dy.legs_from_run(run, 2))
+    orbit = dy.find_hybrid_orbit(system, dy.legs_from_run(run))
+    assert [leg.mode for leg in orbit.legs] in (["minus", "sliding"], ["sliding", "minus"])
     assert orbit.status == "converged", orbit.message
     assert orbit.period == pytest.approx(t_slip + t_stick, rel=1e-12)
     sliding_exit = [S for S, leg in zip(orbit.saltations, orbit.legs) if leg.mode == "sliding"]
@@ -181,6 +183,13 @@ def test_relay_run_matches_an_independent_simulation():
     ref = solve_ivp(lambda t, y: [y[1], -y[0] + 2 * ZETA * y[1] + F_RELAY], (0, first.time), [0.0, 0.0],
                     method="DOP853", rtol=1e-13, atol=1e-13)
     assert np.abs(ref.y[:, -1] - first.before).max() < 1e-9
+
+
+def test_a_run_without_a_closed_cycle_says_so():
+    system = relay()
+    run = dy.simulate_hybrid(system, "minus", np.array([0.0, 0.0]), 3.0, tol=1e-15)  # one jump in and out only
+    with pytest.raises(ParameterError, match="no closed cycle"):
+        dy.legs_from_run(run)
 
 
 def test_declaration_errors_name_the_problem():

@@ -76,15 +76,14 @@ def integrator(tol: float, batch_size: int):
                          nt_events=((gamma, at.FirstTime(), "positive"),))
 
 
-@functools.lru_cache(maxsize=1)
+@functools.lru_cache(maxsize=None)  # the System caches by expression text: fetch it once
 def observables():
     """cfunc of (beta, gamma, alpha_dot, beta_dot, gamma_dot, E_tot, lambda_N, z_S, E_kin) over the model state."""
-    import heyoka as hy
-
     variables, _sys, _fall, outputs = ode.system(MODEL)
     o = dict(zip(ode.OUTPUT_NAMES, outputs))
-    return hy.cfunc([o["beta"], variables[MODEL.state_names.index("gamma")], o["alpha_dot"], o["beta_dot"],
-                     o["gamma_dot"], o["E_kin"] + o["E_pot"], o["lambda_N"], o["z_S"], o["E_kin"]], variables)
+    return ode.as_system(MODEL).function("attractor observables", [
+        o["beta"], variables[MODEL.state_names.index("gamma")], o["alpha_dot"], o["beta_dot"], o["gamma_dot"],
+        o["E_kin"] + o["E_pot"], o["lambda_N"], o["z_S"], o["E_kin"]], "the observables of the attractor map")
 
 
 def evaluate_observables(states, pars) -> dict[str, np.ndarray]:

@@ -23,7 +23,7 @@ y_dot -> u_y, plus the turning-frame terms above; beta_dot, gamma_dot and alpha_
 inverse of (3.3) from the same module.
 
 Derivatives are exact: heyoka differentiates the expressions symbolically (``hy.diff_tensors``)
-and compiles them once per process (``hy.cfunc``, cached on disk by heyoka): the Jacobian for
+and the System compiles them once per process (cached on disk by heyoka): the Jacobian for
 stability (:mod:`.stability`), and (:func:`field`) the tensors up to third order, including
 derivatives with respect to the runtime parameters, for continuation and normal forms.
 Every function evaluates in batches: states (7, N), parameters (11,) or (11, N) in the order of
@@ -47,10 +47,10 @@ TENSOR_PARAMETERS = ("mu", "eps", "e", "A", "B", "C")
 OMEGA_X_INDEX = STATE_NAMES.index("omega_x")  # the direction of the spin family (stationary.stationary_state)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.lru_cache(maxsize=None)  # the System caches by expression text: fetch it once
 def _rhs_cfunc():
     red = reduced_system()
-    return hy.cfunc([*red.rhs, red.alpha_dot, red.lambda_N, *red.slip], red.variables)
+    return system().function("rhs and diagnostics", [*red.rhs, red.alpha_dot, red.lambda_N, *red.slip])
 
 
 def _pars_block(pars: np.ndarray, n: int, nparams: int) -> np.ndarray:
@@ -82,11 +82,9 @@ def evaluate(states, pars) -> dict[str, np.ndarray]:
     return {"rhs": out[:7], "alpha_dot": out[7], "lambda_N": out[8], "slip": out[9:11]}
 
 
-@functools.lru_cache(maxsize=None)
+@functools.lru_cache(maxsize=None)  # the System caches by expression text: fetch it once
 def _jacobian_cfunc():
-    red = reduced_system()
-    jac = hy.diff_tensors(red.rhs, diff_args=red.variables, diff_order=1).jacobian
-    return hy.cfunc(list(np.asarray(jac).ravel()), red.variables)
+    return system().jacobian_function()
 
 
 def jacobian(states, pars) -> np.ndarray:
@@ -99,11 +97,9 @@ def jacobian(states, pars) -> np.ndarray:
     return out.T.reshape(-1, N_STATE, N_STATE)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.lru_cache(maxsize=None)  # the System caches by expression text: fetch it once
 def _alpha_dot_grad_cfunc():
-    red = reduced_system()
-    grad = hy.diff_tensors([red.alpha_dot], diff_args=red.variables, diff_order=1).jacobian
-    return hy.cfunc(list(np.asarray(grad).ravel()), red.variables)
+    return system().function("alpha_dot gradient", system().gradient_expressions([reduced_system().alpha_dot]))
 
 
 def alpha_dot_gradient(x, pars) -> np.ndarray:

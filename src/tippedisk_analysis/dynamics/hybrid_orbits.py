@@ -132,15 +132,36 @@ def _integrals(system, x, pars) -> tuple[np.ndarray, np.ndarray]:
     return out[:len(exprs)], out[len(exprs):].reshape(len(exprs), system.n)
 
 
-def legs_from_run(run: HybridRun, n_legs: int) -> list:
-    """The last ``n_legs`` complete segments of a run as a guess (each from its start to its jump)."""
-    if len(run.switches) < n_legs + 1:
-        raise ParameterError(f"the run has {len(run.switches)} jumps; a guess of {n_legs} legs needs at least "
+CYCLE_TOL = 1e-3  # relative distance of two states K jumps apart that legs_from_run takes for a closed cycle
+
+
+def legs_from_run(run: HybridRun, n_legs: int | None = None) -> list:
+    """The last ``n_legs`` complete segments of a run as a guess (each from its start to its jump). Without
+    ``n_legs``: the shortest cycle at the run's end, K legs whose guards and jumps repeat and whose start
+    returns within CYCLE_TOL (relative) after them; ParameterError if the run shows none."""
+    switches = run.switches
+    if n_legs is None:
+        n_legs = _cycle_length(switches)
+    if len(switches) < n_legs + 1:
+        raise ParameterError(f"the run has {len(switches)} jumps; a guess of {n_legs} legs needs at least "
                              f"{n_legs + 1} (run longer)")
     legs = []
-    for a, b in zip(run.switches[-n_legs - 1:-1], run.switches[-n_legs:]):
+    for a, b in zip(switches[-n_legs - 1:-1], switches[-n_legs:]):
         legs.append(Leg(a.target, np.array(a.after), b.time - a.time, b.guard, b.jump))
     return legs
+
+
+def _cycle_length(switches: list) -> int:
+    keys = [(s.source, s.guard, s.jump, s.target) for s in switches]
+    for K in range(1, len(switches) // 2 + 1):
+        last, before = switches[-1], switches[-1 - K]
+        if keys[-K:] != keys[-2 * K:-K] or last.target != before.target:
+            continue
+        size = max(1.0, float(np.max(np.abs(last.after))))
+        if np.max(np.abs(last.after - before.after)) <= CYCLE_TOL * size:
+            return K
+    raise ParameterError(f"the run's last {len(switches)} jumps show no closed cycle of guards and jumps (within "
+                         f"{CYCLE_TOL:g} relative); run longer, past the transient, or give n_legs")
 
 
 def find_hybrid_orbit(hybrid: HybridSystem, legs, *, pars=None, tol: float = 1e-14, max_iterations: int = 30,
