@@ -137,3 +137,7 @@ def test_the_worked_example_of_docs_dynamics_runs_and_says_what_it_shows(tmp_pat
     assert abs(float(ly.exponents[0])) < 1e-3 and float(ly.exponents[1]) == pytest.approx(math.log(mu) / T, rel=1e-3)
     assert at.sizes["attractor"] == 1 and int(at.attractor_kind[0]) == 1
     assert float(at.attractor_period[0]) == pytest.approx(T, rel=1e-9)
+    # the hybrid example: the bouncing ball's period-1 orbit, one impact per forcing period 2 pi / omega
+    orbit = ns["orbit"]
+    assert orbit.status == "converged" and orbit.period == pytest.approx(2 * math.pi / 20.0, rel=1e-12)
+    assert orbit.stability == "stable" and abs(np.prod(orbit.multipliers[~orbit.trivial]) - 0.25) < 1e-10

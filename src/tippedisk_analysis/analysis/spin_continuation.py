@@ -195,19 +195,20 @@ def branch_dataset(br: continuation.Branch, prob: EquilibriumProblem, setup: Set
     u = br.array("u")
     n = prob.n
     pars = np.array([prob.runtime(ui) for ui in u])
+    ev = np.array([p.eigenvalues for p in br.points])
+    lam = np.atleast_1d(system.observe(u[:, :n].T, pars.T)["lambda_N"])
+    columns = {
+        **{name: ("point", _values_along(name, u, prob, setup),
+                  {"units": PARAMETERS[name][0], "long_name": PARAMETERS[name][1]}) for name in PARAMETERS},
+        **{name: ("point", u[:, i], _STATE_ATTRS[name]) for i, name in enumerate(reduced.STATE_NAMES)},
+        "lambda_N": ("point", lam, {"units": "N", "long_name": "normal force at C1"}),
+        "eig_real": (("point", "eig"), ev.real, {"units": "s-1", "long_name": "real part of the nontrivial "
+                                                 "eigenvalues (spin-family zero deflated), descending"}),
+        "eig_imag": (("point", "eig"), ev.imag, {"units": "rad s-1", "long_name": "imaginary part of the nontrivial "
+                                                 "eigenvalues"}),
+        **_special_table(br)}
     ds = continuation_dataset(br, prob, {"setup": to_dict(setup), **info, "slip_smoothing": float(
-        prob.pars[ode.PARAMETER_NAMES.index("slip_smoothing")]), "heyoka_version": hy.__version__})
-    for name in PARAMETERS:
-        ds[name] = ("point", _values_along(name, u, prob, setup),
-                    {"units": PARAMETERS[name][0], "long_name": PARAMETERS[name][1]})
-    lam = np.array([system.observe(ui[:n], pi)["lambda_N"] for ui, pi in zip(u, pars)]).reshape(len(u))
-    ds["lambda_N"] = ("point", lam, {"units": "N", "long_name": "normal force at C1"})
-    ds["eig_real"].attrs["long_name"] = "real part of the nontrivial eigenvalues (spin-family zero deflated), descending"
-    ds["eig_imag"].attrs["long_name"] = "imaginary part of the nontrivial eigenvalues"
-    for name, variable in _special_table(br).items():
-        ds[name] = variable
-    for name in reduced.STATE_NAMES:
-        ds[name].attrs.update(_STATE_ATTRS[name])
+        prob.pars[ode.PARAMETER_NAMES.index("slip_smoothing")]), "heyoka_version": hy.__version__}, columns)
     labels = ", ".join(f"{sp.label} at " + ", ".join(f"{p.name} = {sp.u[n + j]:.8g}" for j, p in
                                                        enumerate(prob.free)) for sp in br.special_points)
     what = ("curve of " + {"hopf": "Hopf", "zero": "zero-eigenvalue"}[prob.critical] + " points") \
@@ -216,6 +217,7 @@ def branch_dataset(br: continuation.Branch, prob: EquilibriumProblem, setup: Set
                     title="Continuation of the stationary spinning solutions of the tippedisk", model="ode-euler",
                     paper_model="ODE Model 1 (reduced by the rotational symmetry)")
     return ds
+
 
 _STATE_ATTRS = {
     "beta": {"units": "rad", "long_name": "Euler angle beta"},

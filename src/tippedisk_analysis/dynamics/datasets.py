@@ -76,8 +76,10 @@ def special_table(br: Branch, system: System, kinds: dict = SPECIAL_KINDS) -> di
     }
 
 
-def continuation_dataset(br: Branch, prob, info: dict | None = None) -> xr.Dataset:
-    """A branch (or a curve of special points) of an :class:`.equilibria.EquilibriumProblem` as a dataset."""
+def continuation_dataset(br: Branch, prob, info: dict | None = None, columns: dict | None = None) -> xr.Dataset:
+    """A branch (or a curve of special points) of an :class:`.equilibria.EquilibriumProblem` as a dataset;
+    ``columns`` {name: (dims, values, attrs)} are a caller's own variables (added, or replacing the generic ones
+    of that name)."""
     system: System = prob.system
     u = br.array("u")
     n = prob.n
@@ -116,6 +118,7 @@ def continuation_dataset(br: Branch, prob, info: dict | None = None) -> xr.Datas
             "comment": "omega^2 > 0 on the Hopf curve; < 0 on its continuation beyond a Bogdanov-Takens point, "
                        "a neutral saddle (a real pair s, -s: no bifurcation)"})
     data.update(special_table(br, system))
+    data.update(columns or {})
     ds = xr.Dataset(data, coords={
         "point": index_coordinate("point", len(u), "point along the branch"),
         "eig": index_coordinate("eig", ev.shape[1], "eigenvalue index"),
