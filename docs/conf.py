@@ -8,6 +8,7 @@ are MyST notebooks executed during the build (cached in docs/_build/.jupyter_cac
 from __future__ import annotations
 
 import importlib
+import os
 from pathlib import Path
 
 import tippedisk_analysis
@@ -17,10 +18,12 @@ GENERATED = HERE / "_generated"
 
 project = "tippedisk_analysis"
 author = "the tippedisk_analysis developers"
+copyright = "2026, the tippedisk_analysis developers"
 release = version = tippedisk_analysis.__version__
 extensions = ["myst_nb", "sphinx.ext.autodoc", "sphinx.ext.napoleon", "sphinx.ext.mathjax"]
 exclude_patterns = ["_build", "*.py", "**/.ipynb_checkpoints"]
 myst_heading_anchors = 3
+myst_enable_extensions = ["dollarmath", "amsmath"]  # $...$ and $$...$$ rendered by MathJax
 nb_execution_mode = "cache"
 nb_execution_cache_path = str(HERE / "_build" / ".jupyter_cache")
 nb_execution_timeout = 300
@@ -28,7 +31,7 @@ nb_execution_raise_on_error = True
 autodoc_member_order = "bysource"
 autodoc_typehints = "none"
 napoleon_numpy_docstring = True
-html_theme = "alabaster"
+html_theme = "furo"  # wraps code and tables to the window, fits a laptop screen
 html_title = f"tippedisk_analysis {release}"
 suppress_warnings = ["myst.header"]  # pages written for GitHub start at level-2 headings in places
 
@@ -113,5 +116,15 @@ def _generate(_app=None, _config=None) -> None:
             path.write_text(text)
 
 
+def _quiet_kernels() -> None:
+    """The tutorials' kernels log at ERROR: ipykernel warns at every start that a local TCP kernel is not
+    encrypted (the build runs on one machine; nothing leaves it), which buried the build's real messages."""
+    profile = GENERATED / "ipython" / "profile_default"
+    profile.mkdir(parents=True, exist_ok=True)
+    (profile / "ipython_kernel_config.py").write_text('c.IPKernelApp.log_level = "ERROR"\n')
+    os.environ["IPYTHONDIR"] = str(profile.parent)
+
+
 def setup(app):
+    _quiet_kernels()
     app.connect("config-inited", _generate)

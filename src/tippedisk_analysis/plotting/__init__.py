@@ -4,11 +4,13 @@
 from __future__ import annotations
 
 import inspect
+import sys
 from pathlib import Path
 
 import matplotlib
 
-matplotlib.use("Agg")
+if "ipykernel" not in sys.modules:  # figures go to files; a notebook keeps its inline backend and shows them
+    matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import xarray as xr  # noqa: E402
 
