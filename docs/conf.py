@@ -56,26 +56,75 @@ API_MODULES = (
 )
 
 
-def _cli_page() -> str:
+def _cli_examples() -> dict:
+    """The first example of each command printed in the docs or the README (``tippedisk NAME ...``)."""
+    import re
+
+    from tippedisk_analysis.cli.registry import COMMANDS
+
+    text = "\n".join(p.read_text() for p in sorted(HERE.glob("*.md"))) + (HERE.parent / "README.md").read_text()
+    found = {}
+    for name in COMMANDS:
+        lines = re.findall(r"^(?:\\$ )?(tippedisk " + re.escape(name) + r"\b[^\n]*)", text, re.M)
+        if lines:
+            found[name] = lines[0]
+    return found
+
+
+def _cli_pages() -> dict:
+    """{path: text}: the overview of ``tippedisk`` and one page per command (usage, options table, example)."""
+    import argparse
+
     from tippedisk_analysis.cli import build_parser
     from tippedisk_analysis.cli.registry import COMMANDS
 
     parser = build_parser()
-    sub = next(a for a in parser._actions if a.__class__.__name__ == "_SubParsersAction")
-    lines = ["# Command line", "", "Generated from the argparse definitions of `tippedisk` at build time.", "",
-             "```text", parser.format_help().rstrip(), "```", ""]
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    summaries = {a.dest: a.help or "" for a in sub._choices_actions}
+    examples = _cli_examples()
+    overview = ["# Command line", "", "Generated from the argparse definitions of `tippedisk` at build time. "
+                "Every command ends with a one-line result; bad input gives one line naming the problem and exit "
+                "status 2.", "", "| command | what it does |", "|---|---|"]
+    overview += [f"| [`tippedisk {name}`](cli/{name}.md) | {_cell(summaries.get(name, ''))} |" for name in COMMANDS]
+    overview += ["", "```{toctree}", ":hidden:", "", *(f"cli/{name}" for name in COMMANDS), "```", ""]
+    pages = {"cli.md": "\n".join(overview)}
     for name in COMMANDS:
-        lines += [f"## tippedisk {name}", "", "```text", sub.choices[name].format_help().rstrip(), "```", ""]
-    return "\n".join(lines)
+        command = sub.choices[name]
+        formatter = command._get_formatter()
+        lines = [f"# tippedisk {name}", "", command.description or summaries.get(name, ""), "", "```text",
+                 command.format_usage().strip(), "```", "", "| option | default | meaning |", "|---|---|---|"]
+        for action in command._actions:
+            if isinstance(action, argparse._HelpAction):
+                continue
+            flags = ", ".join(action.option_strings) or (action.metavar or action.dest)
+            default = "" if action.default in (None, argparse.SUPPRESS, False) or not action.option_strings \
+                else f"`{action.default}`"
+            text = formatter._expand_help(action) if action.help else ""
+            lines.append(f"| `{flags}` | {default} | {_cell(text)} |")
+        if name in examples:
+            lines += ["", "Example:", "", "```bash", examples[name], "```"]
+        pages[f"cli/{name}.md"] = "\n".join(lines) + "\n"
+    return pages
 
 
-def _api_page() -> str:
-    lines = ["# API reference", "",
-             "Every function and class that a public module lists in `__all__`, with its docstring. Modules "
-             "not listed here (the analysis modules' helpers, models, the CLI) are internal.", ""]
+def _cell(text: str) -> str:
+    return " ".join(str(text).split()).replace("|", "\\|")
+
+
+def _api_pages() -> dict:
+    """{path: text}: the overview of the public modules and one page per module (every name in its
+    ``__all__`` with its docstring)."""
+    overview = ["# API reference", "",
+                "Every function and class that a public module lists in `__all__`, with its docstring, a page per "
+                "module. Modules not listed here (the analysis modules' helpers, models, the CLI) are internal.", "",
+                "| module | contents |", "|---|---|"]
+    pages = {}
     for module_name, title in API_MODULES:
         module = importlib.import_module(module_name)
-        lines += [f"## {title}", "", f"`{module_name}`", ""]
+        slug = module_name.replace("tippedisk_analysis", "td").replace(".", "_")
+        overview.append(f"| [`{module_name}`](api/{slug}.md) | {title} |")
+        summary = (module.__doc__ or "").strip().split("\n\n")[0]
+        lines = [f"# {title}", "", f"`{module_name}`: {summary}", ""]
         for name in module.__all__:
             obj = getattr(module, name)
             if name.startswith("__") or not callable(obj):
@@ -83,7 +132,9 @@ def _api_page() -> str:
             kind = "autoclass" if isinstance(obj, type) else "autofunction"
             members = ["   :members:"] if kind == "autoclass" and not issubclass(obj, Exception) else []
             lines += ["```{eval-rst}", f".. {kind}:: {obj.__module__}.{obj.__qualname__}", *members, "```", ""]
-    return "\n".join(lines)
+        pages[f"api/{slug}.md"] = "\n".join(lines)
+    overview += ["", "```{toctree}", ":hidden:", "", *(p.removesuffix(".md") for p in pages), "```", ""]
+    return {"api.md": "\n".join(overview), **pages}
 
 
 def _schema_page() -> str:
@@ -109,8 +160,9 @@ def _schema_page() -> str:
 
 
 def _generate(_app=None, _config=None) -> None:
-    GENERATED.mkdir(exist_ok=True)
-    for name, text in (("cli.md", _cli_page()), ("api.md", _api_page()), ("schema.md", _schema_page())):
+    for folder in ("cli", "api"):
+        (GENERATED / folder).mkdir(parents=True, exist_ok=True)
+    for name, text in (*_cli_pages().items(), *_api_pages().items(), ("schema.md", _schema_page())):
         path = GENERATED / name
         if not path.exists() or path.read_text() != text:
             path.write_text(text)
