@@ -28,7 +28,7 @@ def stability_map_figure(ds: xr.Dataset, eps_index: int | None = None):
         eps_index = int(np.argmax(counts)) if counts.max() > 0 else len(eps) // 2
     k = eps_index
     vmax = float(np.abs(sub["max_real_eig"]).max()) or 1.0
-    norm = SymLogNorm(linthresh=min(0.1, vmax), vmin=-vmax, vmax=vmax)
+    norm = SymLogNorm(linthresh=min(1e-3, vmax), vmin=-vmax, vmax=vmax)  # |s| down to 1e-3/s takes a colour
     fig, axes = plt.subplots(2, 2, figsize=(11, 8), constrained_layout=True)
     for j, branch in enumerate(sub["branch"].values):
         b = sub.sel(branch=branch)
