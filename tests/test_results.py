@@ -124,3 +124,25 @@ def test_load_refuses_directories_and_non_utf8_names(tmp_path):
         td.load(bad)
     with pytest.raises(td.DatasetError, match="give a file name"):
         td.load(3)
+
+
+def test_datasets_carry_cf_title_history_and_references(tmp_path):
+    """CF's title, history (the command that made the file) and references (the paper for the disk's datasets,
+    the package for any System's)."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from tippedisk_analysis import dynamics as dy
+
+    exe = Path(sys.executable).with_name("tippedisk")
+    subprocess.run([str(exe), "simulate", "--t-end", "0.05", "-o", str(tmp_path / "run.nc")], check=True,
+                   capture_output=True)
+    ds = td.load(tmp_path / "run.nc")
+    assert ds.attrs["title"] == "Simulation of ode-euler (ODE Model 1)"
+    assert ds.attrs["history"].startswith("tippedisk simulate --t-end 0.05 -o ")
+    assert "doi:10.1134/S1560354720060052" in ds.attrs["references"]
+    vdp = dy.textbook_system("vanderpol")
+    section = dy.poincare_section(vdp, [2.0, 0.0], vdp.state_names[0], 0.0, t_end=20.0)
+    assert section.attrs["title"] == f"Poincare section of {vdp.name}"
+    assert section.attrs["references"] == f"tippedisk_analysis {td.__version__}"

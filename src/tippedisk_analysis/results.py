@@ -29,6 +29,8 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
+import shlex
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -39,6 +41,11 @@ from .errors import DatasetError, TippediskError
 from .version import __version__
 
 PRODUCER = "tippedisk_analysis"
+PAPER = ("Sailer, Eugster, Leine, The Tippedisk: a Tippetop Without Rotational Symmetry, Regul. Chaotic Dyn. 25 "
+         "(2020) 553-580, doi:10.1134/S1560354720060052")
+KIND_TITLES = {"simulation": "Simulation", "continuation": "Continuation", "periodic_orbits": "Periodic orbits",
+               "lyapunov": "Lyapunov exponents", "poincare": "Poincare section", "basins": "Basins of attraction",
+               "outcome_map": "Outcome map", "stability_map": "Stability map", "bifurcation": "Bifurcation diagram"}
 
 # name: (units, long_name)
 VARIABLES: dict[str, tuple[str, str]] = {
@@ -114,9 +121,25 @@ def check_finite(ds: xr.Dataset) -> None:
             raise DatasetError(f"variable {name!r} holds non-finite values; refusing to store a silent NaN")
 
 
+def invocation() -> str:
+    """What made a dataset, for CF's ``history``: the ``tippedisk`` command line, or the Python program."""
+    program = Path(sys.argv[0]).name if sys.argv and sys.argv[0] else "python"
+    if program in ("tippedisk", "__main__.py"):
+        return shlex.join(["tippedisk", *sys.argv[1:]])
+    return f"python {program}" if program not in ("-c", "") else "python -c"
+
+
 def make_attrs(kind: str, config: dict, status: str, message: str, **extra) -> dict:
-    """Dataset attributes in netCDF-safe types."""
+    """Dataset attributes in netCDF-safe types, with CF's ``title`` (``extra["title"]`` or the kind and the model
+    or system), ``history`` (:func:`invocation` and the package version) and ``references`` (the paper for the
+    disk's datasets; the package for any System's)."""
+    subject = extra.get("model") or extra.get("system") or ""
+    subject += f" ({extra['paper_model']})" if extra.get("paper_model") else ""
+    title = extra.pop("title", None) or (f"{KIND_TITLES.get(kind, kind)} of {subject}" if subject else
+                                         KIND_TITLES.get(kind, kind))
+    references = f"{PRODUCER} {__version__}" + (f"; {PAPER}" if "model" in extra else "")
     attrs = {
+        "title": title,
         "producer": PRODUCER,
         "producer_version": __version__,
         "kind": kind,
@@ -124,6 +147,8 @@ def make_attrs(kind: str, config: dict, status: str, message: str, **extra) -> d
         "status": status,
         "message": message,
         "Conventions": "CF-1.8",
+        "history": f"{invocation()} ({PRODUCER} {__version__})",
+        "references": references,
     }
     for key, value in extra.items():
         if isinstance(value, bool):
