@@ -20,7 +20,8 @@ project = "tippedisk_analysis"
 author = "the tippedisk_analysis developers"
 copyright = "2026, the tippedisk_analysis developers"
 release = version = tippedisk_analysis.__version__
-extensions = ["myst_nb", "sphinx.ext.autodoc", "sphinx.ext.napoleon", "sphinx.ext.mathjax"]
+extensions = ["myst_nb", "sphinx.ext.autodoc", "sphinx.ext.napoleon", "sphinx.ext.mathjax",
+              "sphinx-mathjax-offline"]  # MathJax served with the site: formulas render without a network
 exclude_patterns = ["_build", "*.py", "**/.ipynb_checkpoints"]
 myst_heading_anchors = 3
 myst_enable_extensions = ["dollarmath", "amsmath"]  # $...$ and $$...$$ rendered by MathJax
