@@ -92,6 +92,10 @@ def test_van_der_pol_section_returns_with_the_period_to_the_same_point():
     assert np.all(ds.y.values > 0)  # upward crossings of x = 0 have y = x' > 0
     np.testing.assert_allclose(ds.y.values, ds.y.values[-1], atol=1e-10)  # one fixed point of the return map
     assert np.all(ds.time.values >= 50.0)  # after the transient
+    from tippedisk_analysis.plotting.trajectories import poincare_figure
+
+    ax = poincare_figure(ds).axes[0]  # the fixed point drawn as one point, not spread over a 1e-12 axis
+    assert np.diff(ax.get_xlim())[0] >= 1.99e-3 and np.diff(ax.get_ylim())[0] >= 1.99e-3 * ds.y.values.max()
 
 
 def test_a_section_on_an_observable_with_a_crossing_limit():

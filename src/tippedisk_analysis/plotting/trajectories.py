@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import matplotlib.pyplot as plt
+import numpy as np
 import xarray as xr
 from matplotlib.colors import BoundaryNorm, ListedColormap
 
@@ -23,10 +24,24 @@ def poincare_figure(ds: xr.Dataset):
     for ax, (x, y) in zip(axes, pairs):
         sc = ax.scatter(ds[x], ds[y], c=ds["time"], s=8, cmap="viridis")
         ax.set(xlabel=axis_label(x, ds[x].attrs.get("units", "")), ylabel=axis_label(y, ds[y].attrs.get("units", "")))
-    fig.colorbar(sc, ax=axes, label=axis_label("time", "s"))
+        _no_round_off_zoom(ax, ds[x].values, ds[y].values)
+    fig.colorbar(sc, ax=axes, label=axis_label("time", ds["time"].attrs.get("units", "s")))
     fig.suptitle(f"Poincaré section {ds.attrs.get('section', '')} ({ds.attrs.get('direction', '')}): "
                  f"{ds.attrs.get('n_crossings', 0)} crossings, {ds.attrs.get('status', '')}")
     return fig
+
+
+def _no_round_off_zoom(ax, xs: np.ndarray, ys: np.ndarray) -> None:
+    """Axes at least 2e-3 of max(|values|, 1) wide: returns that coincide to round-off (a periodic orbit's fixed
+    point, a section's own level) show as one point, not as a cloud on a 1e-12 scale behind an offset."""
+    for values, set_limits in ((np.asarray(xs, float), ax.set_xlim), (np.asarray(ys, float), ax.set_ylim)):
+        v = values[np.isfinite(values)]
+        if v.size == 0:
+            continue
+        scale = max(float(np.abs(v).max()), 1.0)
+        if v.max() - v.min() < 1e-9 * scale:
+            set_limits(float(v.mean()) - 1e-3 * scale, float(v.mean()) + 1e-3 * scale)
+    ax.ticklabel_format(useOffset=False)
 
 
 @figure("outcome_map")
