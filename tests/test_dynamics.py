@@ -145,12 +145,15 @@ points; the branch ends in a homoclinic orbit at D -> 0.10550707004 (an independ
 orbits and of the saddle's manifolds gives the same digits)."""
 
 
-@pytest.fixture(scope="module")
-def ab_orbits(ab, ab_branch):
-    return dy.orbit_branch(ab, ab_branch, "HOPF1", bounds=(0.0, 0.2), period_max=50.0, marks=tuple(AUTO_PERIODS))
+@pytest.fixture(scope="module", params=["collocation", "shooting"])
+def ab_orbits(ab, ab_branch, request):
+    return dy.orbit_branch(ab, ab_branch, "HOPF1", bounds=(0.0, 0.2), period_max=50.0, marks=tuple(AUTO_PERIODS),
+                           method=request.param)
 
 
 def test_ab_orbits_from_the_hopf_point_have_auto07p_periods_and_end_in_a_homoclinic_orbit(ab_orbits):
+    """Both methods: the periods at AUTO-07p's user points to 1e-8, the homoclinic limit to 1e-8, every orbit
+    stable (collocation: every orbit within its error tolerance, the mesh grown where the orbits lengthen)."""
     ds = ab_orbits
     assert ds.attrs["kind"] == "periodic_orbits" and ds.attrs["system"] == "ab"
     assert ds.attrs["labels"] == "UZ1 UZ2 UZ3 HC1"
@@ -160,13 +163,15 @@ def test_ab_orbits_from_the_hopf_point_have_auto07p_periods_and_end_in_a_homocli
     specials = {str(label): int(i) for label, i in zip(ds.special_label.values, ds.special_index.values)}
     for (value, period), label in zip(AUTO_PERIODS.items(), ("UZ1", "UZ2", "UZ3")):
         i = specials[label]
-        assert float(ds.D[i]) == value and float(ds.period[i]) == pytest.approx(period, abs=1e-6), label
+        assert float(ds.D[i]) == value and float(ds.period[i]) == pytest.approx(period, abs=1e-8), label
     i = specials["HC1"]
     k = list(ds.special_label.values).index("HC1")
     assert float(ds.period[i]) == pytest.approx(50.0) and float(ds.special_limit[k]) == pytest.approx(0.10550707004,
                                                                                                      abs=1e-8)
     assert "approach to a homoclinic orbit at D ~ 0.10550707" in ds.attrs["message"]
     assert np.all(ds.stability.values == 0)  # every orbit is stable, as AUTO-07p finds
+    if ds.attrs["method"] == "collocation":
+        assert np.all(ds.discretisation_error.values <= 1e-5) and ds.ntst.values[-1] > ds.ntst.values[0]
     assert np.all(np.diff(ds.period.values) > 0)  # the period grows monotonically towards the homoclinic orbit
 
 

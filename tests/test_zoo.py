@@ -248,9 +248,12 @@ def test_conservative_hopf_point_is_degenerate_and_its_family_vertical():
     assert eq.attrs["status"] == "completed" and list(eq.special_label.values) == ["HOPF1"]
     assert float(eq.mu[int(eq.special_index[0])]) == pytest.approx(0.0, abs=1e-14)
     assert int(eq.special_degenerate[0]) == 1
-    po = dy.orbit_branch(s, eq, "HOPF1", bounds=(-1.0, 1.0))
-    assert po.attrs["status"] == "degenerate" and "vertical family" in po.attrs["message"]
-    assert po.sizes["point"] < 100 and np.max(np.abs(po.mu.values)) < 1e-12
+    for method in ("collocation", "shooting"):
+        po = dy.orbit_branch(s, eq, "HOPF1", bounds=(-1.0, 1.0), method=method)
+        assert po.attrs["status"] == "degenerate" and "vertical family" in po.attrs["message"], method
+        # the family's mu: the round-off of the orbit equations (collocation: of its discretised ones)
+        drift = {"collocation": 1e-10, "shooting": 1e-12}[method]
+        assert po.sizes["point"] < 100 and np.max(np.abs(po.mu.values)) < drift
     assert len(po.attrs["message"]) < 600
 
 
@@ -283,15 +286,15 @@ def test_subcritical_hopf_point_and_its_unstable_orbits():
     assert int(po.stability[k]) == 2  # unstable
 
 
-def test_an_orbit_branch_into_a_canard_explosion_says_it_stalled():
+def test_a_shooting_branch_into_a_canard_explosion_says_it_stalled():
     """eps = 0.05: from the Hopf point a = 1 the orbits grow within ~1e-9 of a = 0.9935 (the canard explosion);
-    shooting creeps there. The branch says so (status stalled, not completed), and its last orbit is right: its
-    period is scipy's return time from its own state."""
+    shooting creeps there (collocation goes through: tests/test_collocation.py). The branch says so (status
+    stalled, not completed), and its last orbit is right: its period is scipy's return time from its own state."""
     s = zoo.canard()
     eq = dy.equilibrium_branch(s, [1.2, 1.2**3 / 3 - 1.2], "a", bounds=(0.0, 1.2), direction=-1)
     assert list(eq.special_label.values) == ["HOPF1"] and float(eq.special_l1[0]) < 0
     assert float(eq.a[int(eq.special_index[0])]) == pytest.approx(1.0, abs=1e-12)
-    po = dy.orbit_branch(s, eq, "HOPF1", bounds=(0.0, 1.2))
+    po = dy.orbit_branch(s, eq, "HOPF1", bounds=(0.0, 1.2), method="shooting")
     assert po.attrs["status"] == "stalled" and "canard" in po.attrs["message"]
     a, T, state = float(po.a[-1]), float(po.period[-1]), po.initial_state.values[-1]
     assert 0.99 < a < 1.0

@@ -21,7 +21,8 @@ from ..dynamics.flows import TAYLOR_TOL, Flow, FlowError
 from ..dynamics.orbit_branches import continue_orbits
 from ..dynamics.orbit_datasets import branch_dataset, orbits_dataset
 from ..dynamics.orbits import NEWTON_MAX_ITER, STATUS, find_orbit, integral_levels
-from ..dynamics.shooting import PeriodicOrbit, ShootingProblem
+from ..dynamics.orbit_base import PeriodicOrbit
+from ..dynamics.shooting import ShootingProblem
 from ..dynamics.system import System
 from ..errors import ParameterError
 from ..models import ode

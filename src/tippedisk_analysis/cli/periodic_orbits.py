@@ -1,11 +1,13 @@
-"""``tippedisk periodic-orbits``: periodic orbits by shooting, their Floquet multipliers and branches.
+"""``tippedisk periodic-orbits``: periodic orbits by shooting or collocation, their Floquet multipliers and branches.
 
 On the tippedisk (``--from-hopf``, ``--from-run``) Newton searches for an orbit of the reduced system and
 reports what it found; with friction there is none (docs/periodic_orbits.md). Exit status: 0 an orbit
 (or a completed branch); 3 no periodic orbit (the dataset is written: per point ``orbit_status`` says
 whether Newton converged to an equilibrium or did not converge, with the residual and the energy lost over
 the trial period); 1 a numerical failure (non-finite flow, a branch ended by the corrector); 2 bad input
-(nothing written). ``--system`` demonstrates the method on the textbook systems of the tests.
+(nothing written). ``--system`` demonstrates the method on the textbook systems of the tests. ``--method``: a
+branch from a Hopf point uses collocation by default (docs/dynamics.md), a single orbit and a branch from an
+orbit shooting.
 """
 
 from __future__ import annotations
@@ -53,16 +55,22 @@ def _arguments(p) -> None:
     book.add_argument("--hopf-radius", type=finite_float, help="orbit radius of a Hopf start (default 0.05; "
                                                                 "--frictionless: 1e-3); --radius is the disk's rim")
     book.add_argument("--period-max", type=finite_float, help="stop the branch at this period (homoclinic approach)")
+    book.add_argument("--method", choices=("collocation", "shooting"),
+                      help="the discretisation (default: collocation for a branch from a Hopf point, else shooting)")
+    book.add_argument("--ntst", type=positive_int, help="collocation: mesh intervals (default 40; more where the "
+                                                        "error estimate asks)")
+    book.add_argument("--ncol", type=positive_int, help="collocation: Gauss points per interval, 2-7 (default 4)")
     book.add_argument("--segments", type=positive_int, help="shooting segments (default 1, or the dataset's)")
     book.add_argument("--phase", choices=("poincare", "integral"),
-                      help="phase condition (default: integral for a branch from a textbook Hopf point, else poincare)")
+                      help="shooting: phase condition (default: integral for a branch from a Hopf point, else "
+                           "poincare)")
     book.add_argument("--max-points", type=positive_int, default=200, help="branch points per direction (200)")
     add_output(p)
     add_disk(p)
 
 
-@command("periodic-orbits", "periodic orbits by shooting: Floquet multipliers, branches (no orbit on the "
-                            "tippedisk with friction: exit 3)", _arguments)
+@command("periodic-orbits", "periodic orbits by shooting or collocation: Floquet multipliers, branches (no orbit "
+                            "on the tippedisk with friction: exit 3)", _arguments)
 def periodic_orbits(args) -> int:
     from .. import results
     from ..analysis import orbits
@@ -161,17 +169,17 @@ def _textbook(args):
         raise ParameterError(f"--hopf-radius {radius:g} must be positive")
     if "hopf" in tb.start and args.to is not None and args.hopf_radius is None:
         return _textbook_hopf_branch(args, system, tb)
+    method, discretisation = _discretisation(args, "shooting", 1, "poincare")
     if "hopf" in tb.start:
         value, state = tb.start["hopf"]
-        orbit, _g = dy.orbit_from_hopf(system, tb.parameter, value, state, radius=radius,
-                                       segments=args.segments or 1, phase=args.phase or "poincare")
+        orbit, _g = dy.orbit_from_hopf(system, tb.parameter, value, state, radius=radius, method=method,
+                                       **discretisation)
     else:
         value, state, period = tb.start["orbit"]
         pars = system.with_pars(**{tb.parameter: value})
         if args.system == "roessler":
             state, period = dy.simulation_guess(system, state, pars, index=1, level=0.0, transient=200.0)
-        orbit = dy.find_orbit(system, state, period, pars, segments=args.segments or 1,
-                              phase=args.phase or "poincare")
+        orbit = dy.find_orbit(system, state, period, pars, method=method, **discretisation)
         orbit.value, orbit.parameter = value, tb.parameter
     config = {"source": "textbook", "start": {k: list(map(float, v[1])) for k, v in tb.start.items()},
               "facts": tb.facts}
@@ -180,24 +188,24 @@ def _textbook(args):
 
 def _textbook_hopf_branch(args, system, tb):
     """The branch born at a textbook system's Hopf point, started along the Hopf tangent (as AUTO-07p)."""
-    from ..dynamics import continuation
     from ..dynamics.orbit_branches import hopf_branch
 
     value, state = tb.start["hopf"]
     if args.to == value:
         raise ParameterError(f"--to {args.to:g} equals the Hopf value {tb.parameter} = {value:g}")
-    options = continuation.Options(ds=0.02, ds_max=0.2, max_points=args.max_points)
+    from ..dynamics.discretisations import DEFAULT_METHOD
+
+    method, discretisation = _discretisation(args, DEFAULT_METHOD, 4, "integral")
     return hopf_branch(system, state, system.with_pars(**{tb.parameter: value}), tb.parameter,
-                       bounds=(min(value, args.to), max(value, args.to)), segments=args.segments or 4,
-                       phase=args.phase or "integral", period_max=args.period_max, options=options,
-                       config={"source": "textbook", "facts": tb.facts, "to": args.to})
+                       bounds=(min(value, args.to), max(value, args.to)), method=method, period_max=args.period_max,
+                       options=_branch_options(args, method), config={"source": "textbook", "facts": tb.facts,
+                                                                      "to": args.to}, **discretisation)
 
 
 def _generic_hopf_branch(args, source, path: str, label: str):
     """--from-hopf on a branch of a generic System: a catalogue system is rebuilt by name (its fingerprint must
     match the file's); a user's System cannot be (equations stored in a file are never evaluated)."""
     from .. import dynamics as dy
-    from ..dynamics import continuation
     from ..results import config_of
 
     name, key = source.attrs.get("system", ""), source.attrs.get("system_key", "")
@@ -213,9 +221,32 @@ def _generic_hopf_branch(args, source, path: str, label: str):
         low, high = min(value, args.to), max(value, args.to)
     if low is None:
         raise ParameterError(f"{path} stores no bounds of {parameter!r}; give --to")
-    options = continuation.Options(ds=0.02, ds_max=0.2, max_points=args.max_points)
-    return dy.orbit_branch(dy.textbook_system(name), source, label, bounds=(low, high), segments=args.segments or 4,
-                           phase=args.phase or "integral", period_max=args.period_max, options=options)
+    from ..dynamics.discretisations import DEFAULT_METHOD
+
+    method, discretisation = _discretisation(args, DEFAULT_METHOD, 4, "integral")
+    return dy.orbit_branch(dy.textbook_system(name), source, label, bounds=(low, high), method=method,
+                           period_max=args.period_max, options=_branch_options(args, method), **discretisation)
+
+
+def _discretisation(args, default: str, segments: int, phase: str) -> tuple[str, dict]:
+    """(method, its options) from --method, --ntst, --ncol, --segments and --phase (--segments or --phase poincare
+    without --method: shooting)."""
+    method = args.method or ("shooting" if args.segments or args.phase == "poincare" else default)
+    if method == "shooting":
+        if args.ntst or args.ncol:
+            raise ParameterError("--ntst and --ncol are collocation options; drop them or give --method collocation")
+        return method, {"segments": args.segments or segments, "phase": args.phase or phase}
+    if args.segments or args.phase == "poincare":
+        raise ParameterError("--segments and --phase poincare are shooting options; drop them or give --method "
+                             "shooting")
+    return method, {"ntst": args.ntst, "ncol": args.ncol}
+
+
+def _branch_options(args, method: str):
+    from ..dynamics import continuation
+    from ..dynamics.discretisations import BRANCH_OPTIONS
+
+    return continuation.Options(**(BRANCH_OPTIONS[method] | {"max_points": args.max_points}))
 
 
 def _orbit_or_branch(args, orbit, parameter: str, config: dict):
@@ -236,9 +267,13 @@ def _orbit_or_branch(args, orbit, parameter: str, config: dict):
     if args.to == start:
         raise ParameterError(f"--to {args.to:g} equals the start value of {parameter}")
     bounds = {parameter: (min(start, args.to), max(start, args.to))}
+    method, discretisation = _discretisation(args, orbit.method, 0, "poincare")
+    if method == "shooting" and not args.segments:
+        discretisation.pop("segments")  # the orbit's own
+    options = (continuation.Options(ds=0.02, ds_max=0.1, max_points=args.max_points) if method == "shooting"
+               else _branch_options(args, method))
     br, prob = dy.continue_orbits(orbit, parameter, bounds=bounds, direction=1 if args.to > start else -1,
-                                  segments=args.segments, phase=args.phase or "poincare", period_max=args.period_max,
-                                  options=continuation.Options(ds=0.02, ds_max=0.1, max_points=args.max_points))
+                                  method=method, period_max=args.period_max, options=options, **discretisation)
     return dy.branch_dataset(prob, br, {**config, "to": args.to})
 
 

@@ -22,7 +22,7 @@ _PUBLIC = {
     "Flow": "flows", "FlowError": "flows", "STABILITY": "flows", "classify": "flows", "STATUS": "orbits",
     "find_orbit": "orbits", "orbit_from_hopf": "orbits", "simulation_guess": "orbits",
     "integral_levels": "orbits", "monodromy_fd": "orbits", "ShootingProblem": "shooting",
-    "PeriodicOrbit": "shooting", "orbit_problem": "orbit_branches", "continue_orbits": "orbit_branches",
+    "PeriodicOrbit": "orbit_base", "orbit_problem": "orbit_branches", "continue_orbits": "orbit_branches",
     "hopf_start": "orbit_branches", "hopf_branch": "orbit_branches", "orbit_branch": "orbit_branches",
     "switch_period_doubling": "orbit_branches", "homoclinic_limit": "orbit_branches",
     "branch_dataset": "orbit_datasets", "orbits_dataset": "orbit_datasets", "orbit_from_dataset": "orbit_datasets",

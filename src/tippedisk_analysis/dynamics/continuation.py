@@ -37,168 +37,30 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.optimize import brentq
 
 from ..errors import ParameterError
-from .detection import LABELS, hopf_test, label_points, nearest_pair, nearest_real, zero_test  # noqa: F401
+from .continuation_interface import Branch, Options, Point, Problem, SpecialPoint
+from .detection import LABELS, label_points  # noqa: F401 (the labels belong to the core's interface)
+from .linear_algebra import null_vector
 
 START_TOL = 1e-6  # a start point's residual, relative to the size of its terms (it is corrected first)
-EASY_ITERATIONS = 3  # the step grows after a correction in at most this many Newton iterations
 ZERO_RATIO = 1e-3  # a located test function is this much smaller than at the ends (a pole or a jump is not)
 STALL_POINTS, STALL_TOL = 30, 1e-10  # a branch whose last 30 points moved p by < 1e-10 (1 + |p|) has stalled
+CHORD_RATE = 0.1  # chord steps go on while each shrinks the step at least tenfold (else a new Jacobian)
+MAX_REFINEMENTS = 2  # finer discretisations tried for one step (Problem.refine) before the step is shortened
 FOLD_NOISE = 1e-9  # a sign change of the tangent's parameter component below this on both sides is no fold
 STATUSES = ("completed", "max_points", "stalled", "corrector_failed")
 RESULTS = frozenset({"completed", "max_points", "degenerate"})  # branch statuses that are results, not failures
 # (``degenerate``: an orbit branch from a degenerate Hopf point, :mod:`.orbit_branches`)
 
-
-@dataclass(frozen=True)
-class Options:
-    """Step control and tolerances, in scaled unknowns (u / scale)."""
-
-    ds: float = 0.02  # first step
-    ds_min: float = 1e-8
-    ds_max: float = 0.2
-    max_points: int = 500
-    tol: float = 1e-11  # corrector: largest scaled Newton step of the last iteration
-    max_newton: int = 8
-    locate_tol: float = 1e-10  # |test function| of a located special point (eigenvalue units)
-    growth: float = 1.5  # step growth after a correction in <= 3 iterations
-
-    def __post_init__(self):
-        for name in ("ds", "ds_min", "ds_max", "tol", "locate_tol", "growth"):
-            value = getattr(self, name)
-            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
-                raise ParameterError(f"continuation option {name} = {value!r} must be a positive number")
-        if not self.ds_min <= abs(self.ds) <= self.ds_max:
-            raise ParameterError(f"step ds = {self.ds} must lie in [ds_min, ds_max] = [{self.ds_min}, {self.ds_max}]")
-        if int(self.max_points) != self.max_points or self.max_points < 2:
-            raise ParameterError(f"max_points = {self.max_points!r} must be an integer >= 2")
-        if not (isinstance(self.max_newton, int) and self.max_newton >= 1):
-            raise ParameterError(f"max_newton = {self.max_newton!r} must be an integer >= 1")
-        if self.growth < 1:
-            raise ParameterError(f"growth = {self.growth!r} must be >= 1 (the step grows after easy corrections)")
-
-
-class Problem:
-    """Interface of a continuation problem (subclass and implement the methods).
-
-    names: unknowns (states, then parameters); scale: their typical magnitudes (the arclength
-    metric); parameters: indices of the free parameters among the unknowns (the first one's
-    tangent component is the fold test); bounds: {index: (low, high)} where a branch ends.
-    """
-
-    names: tuple[str, ...]
-    scale: np.ndarray
-    parameters: tuple[int, ...]
-    bounds: dict
-    terminal: frozenset = frozenset()  # kinds of special points at which a branch ends (e.g. a branch of
-    # periodic orbits at the Hopf point where its amplitude vanishes)
-
-    def residual(self, u: np.ndarray) -> np.ndarray:
-        raise NotImplementedError
-
-    def jacobian(self, u: np.ndarray) -> np.ndarray:
-        raise NotImplementedError
-
-    def state_jacobian(self, u: np.ndarray) -> np.ndarray:
-        """Square matrix whose eigenvalues decide stability and the test functions."""
-        raise NotImplementedError
-
-    def second_derivative(self, u: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        """F_uu[a, b] (for branch switching)."""
-        raise NotImplementedError
-
-    def describe(self, kind: str, u: np.ndarray) -> dict:
-        """Normal-form coefficients etc. of a located special point (optional)."""
-        return {}
-
-    def project(self, u: np.ndarray) -> np.ndarray:
-        """Map an iterate onto a known solution manifold (default: none). A family of equilibria
-        known in closed form keeps its states exact this way."""
-        return u
-
-    def set_reference(self, u: np.ndarray) -> None:
-        """Called with the start guess, the corrected start and every accepted point of a branch (default:
-        nothing). Problems with a moving reference, e.g. the phase condition of periodic orbits relative to
-        the last orbit found (AUTO, BifurcationKit), update it here; located special points and bound points
-        are computed with the reference of the regular point before them."""
-
-    def tests(self, point: "Point") -> dict[str, float]:
-        """Test functions whose sign changes mark special points (default: equilibrium branches)."""
-        return {"fold": point.tangent[self.parameters[0]], "branch_point": zero_test(point.eigenvalues),
-                "hopf": hopf_test(point.eigenvalues)}
-
-    def located_value(self, kind: str, point: "Point") -> float:
-        """A smooth function vanishing at the special point, in eigenvalue units where possible
-        (used to locate it; NaN if undefined there)."""
-        if kind == "fold":
-            return point.tangent[self.parameters[0]]
-        if kind == "branch_point":
-            return nearest_real(point.eigenvalues)
-        if kind == "hopf":
-            return nearest_pair(point.eigenvalues).real
-        return self.tests(point)[kind]
-
-    def accept(self, kind: str, point: "Point", value: float, options: "Options") -> bool:
-        """Whether a located point is the special point (a Hopf test zero may be a neutral saddle)."""
-        if kind == "hopf":
-            scale = np.abs(point.eigenvalues).max()
-            return math.isfinite(value) and abs(value) <= max(options.locate_tol, 1e-8 * scale)
-        return True
-
-
-@dataclass
-class Point:
-    u: np.ndarray
-    tangent: np.ndarray  # unit tangent in scaled unknowns
-    arclength: float  # scaled arclength from the start
-    eigenvalues: np.ndarray  # of the state Jacobian, sorted by real part (descending)
-    newton_iterations: int
-    special: str = ""  # kind if this point is a located special point
-
-
-@dataclass
-class SpecialPoint:
-    kind: str  # a key of LABELS
-    index: int  # position in Branch.points
-    u: np.ndarray
-    eigenvalues: np.ndarray
-    value: float  # the located test function
-    data: dict = field(default_factory=dict)  # frequency, normal-form coefficients, ...
-    label: str = ""  # e.g. HOPF1, set when the branch is finished
-
-
-@dataclass
-class Branch:
-    points: list
-    special_points: list
-    status: str  # one of STATUSES
-    message: str
-    options: Options
-    unlocated: list = field(default_factory=list)  # test-function sign changes that were no zero, where
-
-    def array(self, attribute: str) -> np.ndarray:
-        return np.array([getattr(p, attribute) for p in self.points])
-
-
 # ----------------------------------------------------------------------------- linear algebra
 
 
-def _eigenvalues(matrix: np.ndarray) -> np.ndarray:
-    ev = np.linalg.eigvals(matrix)
-    return ev[np.argsort(-ev.real, kind="stable")]
-
-
 def _tangent(problem: Problem, u: np.ndarray, previous: np.ndarray | None) -> np.ndarray:
-    A = problem.jacobian(u) * problem.scale[None, :]
-    t = np.linalg.svd(A)[2][-1]
-    if previous is not None and t @ previous < 0:
-        t = -t
-    return t
+    return null_vector(lambda row: problem.linearise(u, problem.scale, row), len(u), previous, problem.parameters)
 
 
 # ----------------------------------------------------------------------------- corrector
@@ -206,34 +68,42 @@ def _tangent(problem: Problem, u: np.ndarray, previous: np.ndarray | None) -> np
 
 def correct(problem: Problem, u_guess: np.ndarray, constraint: tuple[np.ndarray, np.ndarray, float] | None,
             options: Options) -> tuple[np.ndarray | None, int]:
-    """Gauss-Newton on F(u) = 0 (+ the arclength constraint t . (v - v0) = ds in scaled unknowns).
+    """Newton on F(u) = 0 (+ the arclength constraint t . (v - v0) = ds in scaled unknowns): Gauss-Newton
+    steps with a dense Jacobian; where the problem's linearisation is a factorisation that serves again
+    (collocation), chord steps that keep it while they converge fast (a new one when a step shrinks by less than
+    CHORD_RATE).
 
-    Converged when the last step is below options.tol (relative) and every residual row is at the
-    round-off level of its terms (1e-9 sum_j |A_ij v_j|). Returns (u, iterations); u None if not
-    converged within options.max_newton steps.
+    Converged when the error left after the last step (Gauss-Newton: the step; chord steps: step * rate /
+    (1 - rate), rate = step / previous step) is below options.tol (relative) and every residual row is at the
+    round-off level of its terms
+    (1e-9 sum_j |A_ij v_j|). Returns (u, iterations); u None if not converged within options.max_newton steps.
     """
     scale = problem.scale
+    row = None if constraint is None else constraint[0]
 
-    def system(v):
-        u = v * scale
-        F = problem.residual(u)
-        A = problem.jacobian(u) * scale[None, :]
-        if constraint is not None:
-            t, v0, ds = constraint
-            F = np.append(F, t @ (v - v0) - ds)
-            A = np.vstack([A, t])
-        return F, A
+    def residual(v):
+        F = problem.residual(v * scale)
+        return F if constraint is None else np.append(F, constraint[0] @ (v - constraint[1]) - constraint[2])
 
     v = u_guess / scale
+    previous, rate, lin = math.inf, 1.0, None
     for it in range(1, options.max_newton + 1):
-        F, A = system(v)
-        if not (np.all(np.isfinite(F)) and np.all(np.isfinite(A))):
+        F = residual(v)
+        if not np.all(np.isfinite(F)):
             return None, it
-        step = np.linalg.lstsq(A, -F, rcond=None)[0]
+        if lin is None or not lin.reusable or rate > CHORD_RATE:
+            lin = problem.linearise(v * scale, scale, row)
+        step = lin.solve(-F)
+        if not np.all(np.isfinite(step)):
+            return None, it
         v = problem.project((v + step) * scale) / scale
-        if np.max(np.abs(step)) <= options.tol * (1.0 + np.max(np.abs(v))):
-            F, A = system(v)
-            if np.all(np.abs(F) <= 1e-9 * (1.0 + np.abs(A) @ np.abs(v))):
+        size = float(np.max(np.abs(step)))
+        rate, previous = size / previous, size
+        # the error left: the step (Gauss-Newton), or estimated from the contraction (chord steps)
+        remaining = size if it == 1 or not lin.reusable else (size * rate / (1.0 - rate) if rate < 1.0 else math.inf)
+        if remaining <= options.tol * (1.0 + np.max(np.abs(v))):
+            F = residual(v)
+            if np.all(np.abs(F) <= 1e-9 * (1.0 + lin.magnitude(v))):
                 return v * scale, it
     return None, options.max_newton
 
@@ -260,7 +130,7 @@ def _step(problem, point: Point, sigma: float, options: Options) -> tuple[np.nda
 
 def _make_point(problem, u, previous_tangent, arclength, iterations, special="") -> Point:
     return Point(u, _tangent(problem, u, previous_tangent), arclength,
-                 _eigenvalues(problem.state_jacobian(u)), iterations, special)
+                 problem.state_eigenvalues(u), iterations, special, problem.discretisation())
 
 
 # ----------------------------------------------------------------------------- the branch
@@ -278,7 +148,7 @@ def continue_branch(problem: Problem, u0: np.ndarray, options: Options = Options
         raise ParameterError("the start point has non-finite entries; give finite values")
     problem.set_reference(u0)
     F = problem.residual(u0)
-    allowed = START_TOL * (1.0 + np.abs(problem.jacobian(u0)) @ np.abs(u0))
+    allowed = START_TOL * (1.0 + problem.linearise(u0, np.ones(len(u0))).magnitude(u0))
     if not np.all(np.abs(F) <= allowed):
         worst = int(np.argmax(np.abs(F) / allowed))
         raise ParameterError(f"the start point is not a solution (residual {abs(F[worst]):.3g} in equation {worst}); "
@@ -290,10 +160,10 @@ def continue_branch(problem: Problem, u0: np.ndarray, options: Options = Options
     t = _tangent(problem, u, tangent)
     if tangent is None and direction * t[problem.parameters[0]] < 0:
         t = -t
-    points = [Point(u, t, 0.0, _eigenvalues(problem.state_jacobian(u)), iterations)]
+    points = [Point(u, t, 0.0, problem.state_eigenvalues(u), iterations, "", problem.discretisation())]
     special: list[SpecialPoint] = []
     dropped: list[str] = []  # test-function sign changes that were not zeros
-    ds, status, message = abs(options.ds), "completed", ""
+    ds, status, message, refinements, base = abs(options.ds), "completed", "", 0, None
     first = problem.parameters[0]
     while True:
         if len(points) >= options.max_points:
@@ -305,7 +175,7 @@ def continue_branch(problem: Problem, u0: np.ndarray, options: Options = Options
                                           f"{_where(problem, points[-1].u)} (a vertical branch, e.g. a canard "
                                           "explosion; raise ds_max or continue in another parameter)")
             break
-        last = points[-1]
+        last = base or points[-1]  # the last point, or that point carried to a new discretisation
         u_new, iterations = _step(problem, last, ds, options)
         if u_new is None:
             ds *= 0.5
@@ -315,11 +185,17 @@ def continue_branch(problem: Problem, u0: np.ndarray, options: Options = Options
                            "a singular point or the end of the branch")
                 break
             continue
-        new = _make_point(problem, u_new, last.tangent, last.arclength + ds, iterations)
-        _locate_marks(problem, last, new, ds, marks, special, points, options)
-        crossed = _first_bound_crossed(problem, last.u, new.u)
+        if ds >= 2 * options.ds_min and problem.refine(u_new):  # too coarse: redo the step on the finer one
+            refinements += 1
+            if refinements > MAX_REFINEMENTS:  # the orbit changes too much over the step for any mesh: shorten it
+                ds *= 0.5
+            base = _carried(problem, last, problem.carry(last))
+            continue
+        refinements = 0
+        _locate_marks(problem, last, u_new, ds, marks, special, points, options)
+        crossed = _first_bound_crossed(problem, last.u, u_new)
         if crossed is not None:
-            end = _locate_bound(problem, last, ds, crossed, options)
+            end = _locate_bound(problem, last, u_new, ds, crossed, options)
             if end is None:  # the corrector fails between the last point and the bound: try a shorter step
                 ds *= 0.5
                 if ds < options.ds_min:
@@ -332,6 +208,7 @@ def continue_branch(problem: Problem, u0: np.ndarray, options: Options = Options
             points.append(end)
             message = f"reached the bound {problem.names[crossed[0]]} = {crossed[1]:g}"
             break
+        new = _make_point(problem, u_new, last.tangent, last.arclength + ds, iterations)
         if detect:
             n_special = len(special)
             _detect_and_locate(problem, last, new, special, points, options, dropped)
@@ -342,15 +219,26 @@ def continue_branch(problem: Problem, u0: np.ndarray, options: Options = Options
                 message = f"ended at a {ends[0].kind} point at {_where(problem, ends[0].u)}"
                 break
         points.append(new)
-        problem.set_reference(new.u)
+        carried = problem.remesh(new)
+        base = None if carried is None else _carried(problem, new, carried)
+        problem.set_reference((base or new).u)
         if on_point is not None:
-            on_point(new)
-        if iterations <= EASY_ITERATIONS:
+            on_point(points[-1])
+        if iterations <= options.easy_iterations:
             ds = min(options.ds_max, ds * options.growth)
     if dropped:
         message += f"; {len(dropped)} sign change(s) of a test function not located as a zero (attribute unlocated)"
     label_points(special)
     return Branch(points, special, status, message, options, dropped)
+
+
+def _carried(problem: Problem, point: Point, carried: tuple) -> Point:
+    """The base of the next step: ``point`` carried to the problem's new discretisation ((u, tangent) of
+    :meth:`Problem.carry` or :meth:`Problem.remesh`); the branch keeps the point as it was solved."""
+    u, tangent = carried
+    problem.set_reference(u)  # the phase condition on the new discretisation
+    return Point(u, tangent, point.arclength, point.eigenvalues, point.newton_iterations, point.special,
+                 problem.discretisation())
 
 
 def _span(points: list, index: int) -> float:
@@ -372,15 +260,15 @@ def _first_bound_crossed(problem: Problem, u_old, u_new):
     return None
 
 
-def _locate_marks(problem, last: Point, new: Point, ds: float, marks, special: list, points: list,
+def _locate_marks(problem, last: Point, u_new: np.ndarray, ds: float, marks, special: list, points: list,
                   options: Options) -> None:
-    """The points at the ``marks`` of the first parameter passed between ``last`` and ``new``, in order."""
+    """The points at the ``marks`` of the first parameter passed between ``last`` and ``u_new``, in order."""
     index = problem.parameters[0]
-    a, b = last.u[index], new.u[index]
+    a, b = last.u[index], u_new[index]
     found = []
     for value in marks:
         if (a < value <= b) or (b <= value < a):
-            point = _locate_bound(problem, last, ds, (index, float(value)), options, "user")
+            point = _locate_bound(problem, last, u_new, ds, (index, float(value)), options, "user")
             if point is not None:
                 found.append(point)
     for point in sorted(found, key=lambda p: p.arclength):
@@ -389,21 +277,32 @@ def _locate_marks(problem, last: Point, new: Point, ds: float, marks, special: l
                                     problem.describe("user", point.u)))
 
 
-def _locate_bound(problem, last: Point, ds: float, crossed, options, kind: str = "bound") -> Point | None:
-    """The branch point on the bound (Brent on the arclength); None if the corrector fails there."""
+def _locate_bound(problem, last: Point, u_new: np.ndarray, ds: float, crossed, options,
+                  kind: str = "bound") -> Point | None:
+    """The branch point where unknown ``index`` equals ``bound``, between ``last`` and ``u_new``: Newton with that
+    unknown fixed from the secant between them, else (near a fold, where that is singular) Brent on the
+    arclength; None if the corrector fails there."""
     index, bound = crossed
+    v0 = last.u / problem.scale
+    w = (bound - last.u[index]) / (u_new[index] - last.u[index])
+    e = np.zeros(len(v0))
+    e[index] = 1.0
+    u, _it = correct(problem, (1 - w) * last.u + w * u_new, (e, np.zeros(len(v0)), bound / problem.scale[index]),
+                     options)
+    sigma = math.nan if u is None else float(last.tangent @ (u / problem.scale - v0))
+    if not -1e-9 * ds <= sigma <= ds * (1 + 1e-9):
 
-    def g(sigma):
+        def g(sigma):
+            u = _step_to(problem, last, sigma, options)
+            return (u[index] - bound) if u is not None else math.nan
+
+        try:
+            sigma = brentq(g, 0.0, ds, xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200) if g(0.0) != 0 else 0.0
+        except ValueError:  # the corrector failed inside the step
+            return None
         u = _step_to(problem, last, sigma, options)
-        return (u[index] - bound) if u is not None else math.nan
-
-    try:
-        sigma = brentq(g, 0.0, ds, xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200) if g(0.0) != 0 else 0.0
-    except ValueError:  # the corrector failed inside the step
-        return None
-    u = _step_to(problem, last, sigma, options)
-    if u is None:
-        return None
+        if u is None:
+            return None
     u[index] = bound  # exact: the corrector solved to round-off
     return _make_point(problem, u, last.tangent, last.arclength + sigma, 0, kind)
 
@@ -426,6 +325,8 @@ def _detect_and_locate(problem, last: Point, new: Point, special: list, points: 
         found = _locate(problem, kind, last, new, options)
         if found is None:
             dropped.append(f"{kind} near {_where(problem, new.u)}")
+        elif isinstance(found, str):
+            dropped.append(f"{kind} near {_where(problem, new.u)} not confirmed: {found}")
         elif found is not REJECTED:
             located.append(found)
     for point, value, kind in sorted(located, key=lambda item: item[0].arclength):
@@ -436,7 +337,8 @@ def _detect_and_locate(problem, last: Point, new: Point, special: list, points: 
 
 def _locate(problem, kind: str, last: Point, new: Point, options: Options):
     """Brent on the arclength between two points, on the problem's smooth located_value if it
-    brackets the zero, else on the detecting test function; None if the problem rejects the point."""
+    brackets the zero, else on the detecting test function: (point, value, kind); None if it cannot be located,
+    REJECTED if the problem declines the point, the problem's reason if it could not confirm it."""
     cache: dict[float, Point | None] = {}
 
     span = new.arclength - last.arclength
@@ -471,8 +373,11 @@ def _locate(problem, kind: str, last: Point, new: Point, options: Options):
         return None  # the sign changed through a pole or a jump, not a zero
     point = at(sigma)
     value = smooth(sigma)
-    if not problem.accept(kind, point, value, options):
-        return REJECTED  # e.g. a neutral saddle where a Hopf test vanishes: not a special point, not an error
+    verdict = problem.accept(kind, point, value, options)
+    if isinstance(verdict, str):  # the problem could not confirm it (the reason)
+        return verdict
+    if not verdict:  # e.g. a neutral saddle where a Hopf test vanishes: not a special point
+        return REJECTED
     point.special = kind
     return point, float(value), kind
 
@@ -480,15 +385,19 @@ def _locate(problem, kind: str, last: Point, new: Point, options: Options):
 REJECTED = object()  # _locate: a zero the problem declines (no special point, nothing to report)
 
 
-def continue_both_ways(problem: Problem, u0: np.ndarray, options: Options = Options(), detect: bool = True) -> Branch:
+def continue_both_ways(problem: Problem, u0: np.ndarray, options: Options = Options(), detect: bool = True,
+                       marks=()) -> Branch:
     """The branch through u0 in both directions, as one branch ordered from one end to the other
     (arclength 0 at u0, negative on the first part)."""
-    backward = continue_branch(problem, u0, options, direction=-1, detect=detect)
-    forward = continue_branch(problem, u0, options, tangent=-backward.points[0].tangent, detect=detect)
+    start = problem.discretisation()
+    backward = continue_branch(problem, u0, options, direction=-1, detect=detect, marks=marks)
+    problem.use(start)
+    forward = continue_branch(problem, u0, options, tangent=-backward.points[0].tangent, detect=detect, marks=marks)
     n_back = len(backward.points)
     points = []
     for p in reversed(backward.points):
-        points.append(Point(p.u, -p.tangent, -p.arclength, p.eigenvalues, p.newton_iterations, p.special))
+        points.append(Point(p.u, -p.tangent, -p.arclength, p.eigenvalues, p.newton_iterations, p.special,
+                            p.discretisation))
     points += forward.points[1:]
     special = [SpecialPoint(sp.kind, n_back - 1 - sp.index, sp.u, sp.eigenvalues, sp.value, sp.data)
                for sp in reversed(backward.special_points)]

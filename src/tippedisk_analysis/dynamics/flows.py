@@ -105,11 +105,12 @@ class Flow:
 # ---------------------------------------------------------------------------- Floquet multipliers
 
 
-def floquet(M: np.ndarray, flow_direction: np.ndarray, n_trivial: int = 1) -> tuple[np.ndarray, np.ndarray]:
-    """Multipliers (eigenvalues of M, sorted by modulus, descending) and a mask of the trivial ones:
-    the flow direction's (the eigenvector most parallel to f(x_0) among those with mu near 1), then the
-    ``n_trivial`` - 1 others nearest 1."""
-    vals, vecs = np.linalg.eig(M)
+def floquet(M: np.ndarray | None, flow_direction: np.ndarray, n_trivial: int = 1,
+            eigen: tuple | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Multipliers (eigenvalues of M, or ``eigen`` = (values, vectors) computed otherwise, sorted by modulus,
+    descending) and a mask of the trivial ones: the flow direction's (the eigenvector most parallel to f(x_0)
+    among those with mu near 1), then the ``n_trivial`` - 1 others nearest 1."""
+    vals, vecs = np.linalg.eig(M) if eigen is None else eigen
     order = np.argsort(-np.abs(vals), kind="stable")
     vals, vecs = vals[order], vecs[:, order]
     trivial = np.zeros(len(vals), bool)

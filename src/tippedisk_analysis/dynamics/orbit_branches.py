@@ -37,54 +37,72 @@ from .datasets import point_of, special_point
 from .flows import TAYLOR_TOL
 from .orbit_datasets import branch_dataset
 from .orbits import integral_levels
-from .shooting import N_SAMPLES, PeriodicOrbit, ShootingProblem
+from .collocation_mesh import Mesh
+from .discretisations import (BRANCH_OPTIONS, CONTINUE_OPTIONS, DEFAULT_METHOD, check_method, make_problem,
+                              method_options, period_scale)
+from .orbit_base import N_SAMPLES, OrbitProblem, PeriodicOrbit
 from .system import System
 
 
-def orbit_problem(orbit: PeriodicOrbit, parameter: str, *, parameter_scale: float = 1.0, bounds: dict | None = None,
-                  segments: int | None = None, phase: str = "poincare", period_max: float | None = None,
-                  tol: float = TAYLOR_TOL, pinned=()) -> tuple[ShootingProblem, np.ndarray]:
+def orbit_problem(orbit: PeriodicOrbit, parameter: str, *, method: str | None = None, parameter_scale: float = 1.0,
+                  bounds: dict | None = None, period_max: float | None = None, tol: float = TAYLOR_TOL, pinned=(),
+                  **discretisation) -> tuple[OrbitProblem, np.ndarray]:
     """The continuation problem through ``orbit`` in ``parameter`` (a runtime parameter, a first integral's
-    level or a pinned state) and its start unknowns u0; ``pinned``: states held at the start orbit's values
-    (:class:`.shooting.ShootingProblem` pins)."""
+    level or a pinned state) and its start unknowns u0, by ``method`` (default the orbit's own) with the
+    ``discretisation`` options of :mod:`.discretisations`; ``pinned``: states held at the start orbit's values."""
     if not orbit.converged:
         raise ParameterError(f"the start is not a periodic orbit (status {orbit.status}): {orbit.message}")
     system = orbit.system
+    method = check_method(method or orbit.method)
     pins = {name: float(orbit.states[0][system.state_index(name)]) for name in pinned}
     k = None if parameter in system.integrals or parameter in pins else system.parameter_index(parameter)
     bounds = dict(bounds or {})
     if period_max is not None:
         bounds["T"] = (0.0, float(period_max))
-    m = segments or len(orbit.states)
     levels = integral_levels(system, orbit.states[0], orbit.pars)
     value = {**levels, **pins}[parameter] if k is None else orbit.pars[k]
-    prob = ShootingProblem(system, orbit.pars, segments=m, phase=phase, parameter=parameter,
-                           parameter_scale=parameter_scale, period_scale=orbit.period, bounds=bounds, tol=tol,
-                           levels=levels, pins=pins)
-    u0 = (np.concatenate([orbit.states.ravel(), [orbit.period, value]]) if m == len(orbit.states)
-          else prob.unknowns(orbit.states[0], orbit.period, value))
+    same = orbit.method == method
+    if method == "shooting":
+        discretisation["segments"] = discretisation.get("segments") or (len(orbit.states) if same else 1)
+        same = same and discretisation["segments"] == len(orbit.states)
+    elif same and discretisation.get("ntst") in (None, len(orbit.mesh) - 1) and discretisation.get("ncol") in (
+            None, orbit_ncol(orbit)):
+        discretisation["mesh"] = Mesh(orbit.mesh, orbit_ncol(orbit))
+    else:
+        same = False
+    prob = make_problem(method, system, orbit.pars, parameter=parameter, parameter_scale=parameter_scale,
+                        period_scale=period_scale(method, orbit.period), bounds=bounds, tol=tol, levels=levels,
+                        pins=pins, **discretisation)
+    u0 = prob.pack(orbit.states, orbit.period, value) if same else prob.unknowns(orbit.states[0], orbit.period, value)
     return prob, u0
 
 
+def orbit_ncol(orbit: PeriodicOrbit) -> int:
+    """ncol of a collocation orbit (its nodes per mesh interval)."""
+    return len(orbit.states) // (len(orbit.mesh) - 1)
+
+
 def continue_orbits(orbit: PeriodicOrbit, parameter: str, *, bounds=None, direction: int = 1,
-                    both_ways: bool = False, options: continuation.Options | None = None, **problem_options):
+                    both_ways: bool = False, options: continuation.Options | None = None, marks=(),
+                    **problem_options):
     """The branch of periodic orbits through ``orbit`` in ``parameter`` by PALC within ``bounds`` (a (low, high)
     pair for ``parameter``, or {name or "T": (low, high)}), with its special points
     (fold of cycles, branch point, period doubling, Neimark-Sacker, approach to a homoclinic orbit at the
-    period bound ``period_max``). Returns (Branch, ShootingProblem)."""
+    period bound ``period_max``; user points at ``marks``); ``problem_options``: those of :func:`orbit_problem`
+    (method, ntst, ncol, segments, ...). Returns (Branch, problem)."""
     if bounds is not None and not isinstance(bounds, dict):
         bounds = {parameter: bounds_pair(bounds, parameter)}
     prob, u0 = orbit_problem(orbit, parameter, bounds=bounds, **problem_options)
-    options = options or continuation.Options(ds=0.02, ds_max=0.1, max_points=200)
+    options = options or continuation.Options(**CONTINUE_OPTIONS[prob.method])
     if both_ways:
-        br = continuation.continue_both_ways(prob, u0, options)
+        br = continuation.continue_both_ways(prob, u0, options, marks=marks)
     else:
-        br = continuation.continue_branch(prob, u0, options, direction=direction)
+        br = continuation.continue_branch(prob, u0, options, direction=direction, marks=marks)
     _mark_homoclinic(prob, br)
     return br, prob
 
 
-def _mark_homoclinic(prob: ShootingProblem, br: continuation.Branch) -> None:
+def _mark_homoclinic(prob: OrbitProblem, br: continuation.Branch) -> None:
     """If the branch ended at the period bound with the period growing and the parameter converging, add a
     special point ``homoclinic`` at the last point with the limit p_hc of p - p_hc ~ A exp(-lam T)."""
     if prob.t_index not in prob.bounds or not br.points:
@@ -124,14 +142,14 @@ def homoclinic_limit(T: np.ndarray, P: np.ndarray) -> tuple[float, float]:
     return float(P[-1] + slope[-1] / lam * math.exp(-lam * (T[-1] - Tm[-1]))), float(lam)
 
 
-def switch_period_doubling(prob: ShootingProblem, br: continuation.Branch, label: str, *, h: float = 0.02,
+def switch_period_doubling(prob: OrbitProblem, br: continuation.Branch, label: str, *, h: float = 0.02,
                            options: continuation.Options | None = None):
     """Continue the orbit of twice the period emanating from the period-doubling point ``label`` of ``br``.
 
-    In the problem of period 2T (2m segments) the PD orbit traversed twice is a branch point whose second
-    kernel direction is the PD eigenvector v (M v = -v), propagated along the orbit: +phi(t_k) v on the first
-    pass, -phi(t_k) v on the second. The corrector with the constraint along that direction lands on the
-    doubled orbit. Returns (Branch, doubled ShootingProblem); ParameterError if it falls back onto the old one.
+    In the problem of period 2T (the orbit traversed twice: 2m segments, or the mesh twice) the PD orbit is a
+    branch point whose second kernel direction is the PD eigenvector v (M v = -v), propagated along the orbit:
+    +v(t) on the first pass, -v(t) on the second. The corrector with the constraint along that direction lands on
+    the doubled orbit. Returns (Branch, doubled problem); ParameterError if it falls back onto the old one.
     """
     labels = [sp.label for sp in br.special_points]
     if label not in labels:
@@ -139,46 +157,32 @@ def switch_period_doubling(prob: ShootingProblem, br: continuation.Branch, label
     sp = br.special_points[labels.index(label)]
     if sp.kind != "period_doubling":
         raise ParameterError(f"{label} is a {sp.kind} point; give a period-doubling point (PD)")
+    prob.use(br.points[sp.index].discretisation)
     u = sp.u
-    X, T, p = prob.split(u)
     ev = prob._evaluate(u)
     vals, vecs = np.linalg.eig(ev["M"])
     v = vecs[:, np.argmin(np.abs(vals + 1.0))].real
     v /= np.linalg.norm(v / prob.system.state_scale)
-    m = prob.m
-    double = ShootingProblem(prob.system, prob.runtime(u), segments=2 * m, phase=prob.phase, parameter=prob.parameter,
-                             parameter_scale=prob.scale[-1], period_scale=2 * T,
-                             bounds={("T" if i == prob.t_index else prob.parameter):
-                                     ((2 * lo, 2 * hi) if i == prob.t_index else (lo, hi))
-                                     for i, (lo, hi) in prob.bounds.items()}, tol=prob.flow.tol,
-                             samples=2 * prob.samples, levels=prob.levels, pins=prob.pins)
-    vk = [v]
-    for k in range(m - 1):
-        vk.append(_segment_phi(prob, u, k) @ vk[-1])
-    direction = np.concatenate([*vk, *(-w for w in vk), [0.0, 0.0]])
-    u2 = np.concatenate([X.ravel(), X.ravel(), [2 * T, p]])
-    d = direction / double.scale
+    along = prob.propagate(u, v)
+    double, u2 = prob.doubled(u)
+    d = double.pack(np.vstack([along, -along]), 0.0, 0.0) / double.scale
     d /= np.linalg.norm(d)
     options = options or br.options
     double.set_reference(u2)
     v0 = u2 / double.scale
+    half = len(along)
     for sign in (1.0, -1.0):
         start, _ = continuation.correct(double, (v0 + sign * h * d) * double.scale, (sign * d, v0, h), options)
         if start is None:
             continue
         Xs = double.split(start)[0]
-        gap = np.max(np.abs(Xs[0] - Xs[m]) / np.asarray(prob.system.state_scale))
+        gap = np.max(np.abs(Xs[0] - Xs[half]) / np.asarray(prob.system.state_scale))
         if gap > 1e-3 * h:
             branch = continuation.continue_branch(double, start, options, tangent=sign * d)
             _mark_homoclinic(double, branch)
             return branch, double
     raise ParameterError(f"no orbit of twice the period found next to {label} (the corrector fell back onto the "
                          "old orbit); try a larger h")
-
-
-def _segment_phi(prob: ShootingProblem, u, k: int) -> np.ndarray:
-    X, T, _p = prob.split(u)
-    return prob.flow.variational(X[k], T / prob.m, prob.runtime(u))[1]
 
 
 # ---------------------------------------------------------------------------- the start at a Hopf point
@@ -199,13 +203,15 @@ def _critical_pair(J: np.ndarray, scale: np.ndarray) -> tuple[float, np.ndarray]
     return float(vals[i].imag), q
 
 
-def hopf_start(system: System, state, pars, parameter: str, *, segments: int = 4, phase: str = "integral",
+def hopf_start(system: System, state, pars, parameter: str, *, method: str = DEFAULT_METHOD,
                bounds: dict | None = None, period_max: float | None = None, ds: float = 0.01,
-               parameter_scale: float = 1.0, tol: float = TAYLOR_TOL,
-               options: continuation.Options | None = None) -> tuple[ShootingProblem, np.ndarray, np.ndarray]:
+               parameter_scale: float = 1.0, tol: float = TAYLOR_TOL, options: continuation.Options | None = None,
+               **discretisation) -> tuple[OrbitProblem, np.ndarray, np.ndarray]:
     """(problem, u, tangent): the first orbit of the branch born at the Hopf point (``state``, ``pars``) in
     ``parameter``, at scaled arclength ``ds`` from the zero-amplitude orbit along the Hopf tangent (module
-    docstring), and the tangent to continue along. ``bounds`` {"T" or parameter: (low, high)}."""
+    docstring), and the tangent to continue along. ``bounds`` {"T" or parameter: (low, high)}; ``method`` and
+    its ``discretisation`` options: :mod:`.discretisations` (shooting: 4 segments, the integral phase
+    condition)."""
     pars = system.with_pars(pars)
     k = system.parameter_index(parameter)
     state = np.asarray(state, dtype=float)
@@ -214,12 +220,13 @@ def hopf_start(system: System, state, pars, parameter: str, *, segments: int = 4
     bounds = dict(bounds or {})
     if period_max is not None:
         bounds["T"] = (0.0, float(period_max))
-    prob = ShootingProblem(system, pars, segments=segments, phase=phase, parameter=parameter,
-                           parameter_scale=parameter_scale, period_scale=period, bounds=bounds, tol=tol)
-    m = prob.m
-    base = np.concatenate([np.tile(state, m), [period, pars[k]]])
-    rotation = [(q * np.exp(2j * math.pi * j / m)).real for j in range(m)]  # Re(q e^{i omega t_j}), t_j = j T / m
-    tangent = np.concatenate([*rotation, [0.0, 0.0]]) / prob.scale
+    prob = make_problem(method, system, pars, default_segments=4, default_phase="integral", parameter=parameter,
+                        parameter_scale=parameter_scale, period_scale=period_scale(method, period), bounds=bounds,
+                        tol=tol, **discretisation)
+    tau = prob.node_times
+    base = prob.pack(np.tile(state, len(tau)), period, pars[k])
+    rotation = (q[None, :] * np.exp(2j * math.pi * tau)[:, None]).real  # Re(q e^{i omega t}) at the nodes
+    tangent = prob.pack(rotation, 0.0, 0.0) / prob.scale
     tangent /= np.linalg.norm(tangent)
     options = options or continuation.Options()
     v0 = base / prob.scale
@@ -248,15 +255,17 @@ def _explain_stall(system: System, state, pars, parameter: str, br: continuation
                   "computed lie on that family")
 
 
-def orbit_branch(system: System, branch: xr.Dataset, label: str, *, bounds, segments: int = 4,
-                 phase: str = "integral", period_max: float | None = None, parameter_scale: float = 1.0,
-                 marks=(), options: continuation.Options | None = None, n_samples: int = N_SAMPLES,
-                 **option_keywords) -> xr.Dataset:
+def orbit_branch(system: System, branch: xr.Dataset, label: str, *, bounds, method: str = DEFAULT_METHOD,
+                 period_max: float | None = None, parameter_scale: float = 1.0, marks=(),
+                 options: continuation.Options | None = None, n_samples: int = N_SAMPLES,
+                 **keywords) -> xr.Dataset:
     """The branch of periodic orbits born at Hopf point ``label`` of ``branch`` (a dataset of
     :func:`.branches.equilibrium_branch` for ``system``), continued in the branch's parameter within ``bounds``
     = (low, high), with its special points; ``period_max`` stops it at that period (the approach to a
     homoclinic orbit is reported with its extrapolated parameter); ``marks``: parameter values where the orbits
-    are computed exactly (user points UZ1, ...). A dataset of kind ``periodic_orbits``."""
+    are computed exactly (user points UZ1, ...); ``method``: collocation (``ntst``, ``ncol``, ``adapt``,
+    ``error_tol``, ``ntst_max``) or shooting (``segments``, ``phase``); the other ``keywords`` are those of
+    :class:`.continuation.Options` (ds, ds_max, max_points, ...). A dataset of kind ``periodic_orbits``."""
     index, kind = special_point(branch, label)
     if kind != "hopf":
         raise ParameterError(f"{label} is a {kind} point; periodic orbits are born at a Hopf point")
@@ -265,25 +274,26 @@ def orbit_branch(system: System, branch: xr.Dataset, label: str, *, bounds, segm
         raise ParameterError(f"{label} lies on a curve in {', '.join(parameters)}; give a branch in one parameter")
     parameter = parameters[0]
     state, pars = point_of(branch, system, index)
-    return hopf_branch(system, state, pars, parameter, bounds=bounds, segments=segments, phase=phase,
-                       period_max=period_max, parameter_scale=parameter_scale, marks=marks, options=options,
-                       n_samples=n_samples, config={"source_label": label}, **option_keywords)
+    return hopf_branch(system, state, pars, parameter, bounds=bounds, method=method, period_max=period_max,
+                       parameter_scale=parameter_scale, marks=marks, options=options, n_samples=n_samples,
+                       config={"source_label": label}, **keywords)
 
 
-def hopf_branch(system: System, state, pars, parameter: str, *, bounds, segments: int = 4,
-                phase: str = "integral", period_max: float | None = None, parameter_scale: float = 1.0,
-                marks=(), options: continuation.Options | None = None, n_samples: int = N_SAMPLES,
-                config: dict | None = None, **option_keywords) -> xr.Dataset:
+def hopf_branch(system: System, state, pars, parameter: str, *, bounds, method: str = DEFAULT_METHOD,
+                period_max: float | None = None, parameter_scale: float = 1.0, marks=(),
+                options: continuation.Options | None = None, n_samples: int = N_SAMPLES, config: dict | None = None,
+                **keywords) -> xr.Dataset:
     """The branch of periodic orbits born at the Hopf point (``state``, ``pars``) in ``parameter``, as
     :func:`orbit_branch` (which finds the point on an equilibrium branch); ``config``: more provenance."""
     pars = system.with_pars(pars)
     low, high = bounds_pair(bounds, parameter)
+    discretisation, option_keywords = method_options(keywords)
     if options is not None and option_keywords:
         raise ParameterError("give either options=Options(...) or the option keywords (ds, ds_max, ...), not both")
-    options = options or continuation.Options(**({"ds": 0.02, "ds_max": 0.2, "max_points": 300} | option_keywords))
-    prob, u, tangent = hopf_start(system, state, pars, parameter, segments=segments, phase=phase,
-                                  bounds={parameter: (low, high)}, period_max=period_max,
-                                  parameter_scale=parameter_scale, options=options)
+    options = options or continuation.Options(**(BRANCH_OPTIONS[check_method(method)] | option_keywords))
+    prob, u, tangent = hopf_start(system, state, pars, parameter, method=method, bounds={parameter: (low, high)},
+                                  period_max=period_max, parameter_scale=parameter_scale, options=options,
+                                  **discretisation)
     br = continuation.continue_branch(prob, u, options, tangent=tangent, marks=marks)
     _mark_homoclinic(prob, br)
     if br.status == "stalled":

@@ -13,22 +13,25 @@ from ..results import config_of, index_coordinate, make_attrs
 from . import continuation
 from .datasets import (check_system, flag_attrs, label_coordinates, mixed_units, state_coordinates, summary,
                        unlocated_attrs)
-from .flows import STABILITY, classify
+from .flows import STABILITY
 from .orbits import NEWTON_MAX_ITER, STATUS, find_orbit
-from .shooting import N_SAMPLES, PeriodicOrbit, ShootingProblem
+from .orbit_base import N_SAMPLES, TRIVIAL_TOL, OrbitProblem, PeriodicOrbit
 from .system import System
 
 SPECIAL_KINDS = {"bound": 0, "fold": 1, "branch_point": 2, "period_doubling": 3, "neimark_sacker": 4,
                  "homoclinic": 5, "hopf": 6, "user": 7}
 """int8 codes of ``special_kind`` in periodic-orbit datasets."""
+MULTIPLIER_SOURCES = {"collocation": 0, "shooting": 1}
+"""int8 codes of ``multiplier_source`` in collocation datasets."""
 
 
-def branch_orbits(prob: ShootingProblem, br: continuation.Branch, n_samples: int = N_SAMPLES) -> list[PeriodicOrbit]:
-    """The orbits of a branch's points (samples, multipliers, amplitude measures)."""
-    return [prob.orbit(p.u, "converged", "", None, p.newton_iterations, n_samples) for p in br.points]
+def branch_orbits(prob: OrbitProblem, br: continuation.Branch, n_samples: int = N_SAMPLES) -> list[PeriodicOrbit]:
+    """The orbits of a branch's points (samples, multipliers, amplitude measures), each on its own mesh."""
+    return [prob.orbit(p.u, "converged", "", None, p.newton_iterations, n_samples, p.discretisation)
+            for p in br.points]
 
 
-def branch_dataset(prob: ShootingProblem, br: continuation.Branch, info: dict | None = None,
+def branch_dataset(prob: OrbitProblem, br: continuation.Branch, info: dict | None = None,
                    n_samples: int = N_SAMPLES, extra=None) -> xr.Dataset:
     """A branch of periodic orbits as a dataset of kind ``periodic_orbits``; ``extra(orbits)``: more variables
     computed from the branch's orbits ({name: (dims, values, attrs)})."""
@@ -36,9 +39,8 @@ def branch_dataset(prob: ShootingProblem, br: continuation.Branch, info: dict | 
     status = br.status
     labels = summary([f"{sp.label} at {prob.parameter} = {sp.u[prob.t_index + 1]:.10g}" for sp in br.special_points])
     message = f"branch of {len(orbits)} periodic orbits; {br.message}" + (f"; {labels}" if labels else "")
-    config = {"options": dataclasses.asdict(br.options), "segments": prob.m, "phase": prob.phase,
-              "tol": prob.flow.tol, "bounds": {prob.names[i]: list(b) for i, b in prob.bounds.items()},
-              **(info or {})}
+    config = {"options": dataclasses.asdict(br.options), **prob.config(),
+              "bounds": {prob.names[i]: list(b) for i, b in prob.bounds.items()}, **(info or {})}
     ds = orbits_dataset(orbits, status, message, config, special=br.special_points, prob=prob,
                         arclength=br.array("arclength"), extra=extra(orbits) if extra else None)
     ds.attrs.update(unlocated_attrs(br))
@@ -68,7 +70,7 @@ def orbits_dataset(orbits: list[PeriodicOrbit], status: str, message: str, confi
         return a if len(a) == N else np.repeat(a[:1], N, axis=0)
 
     mu = np.array([o.multipliers for o in orbits])
-    stab = np.array([classify(o.multipliers, o.trivial) if o.converged or o.status == "not_converged"
+    stab = np.array([o.classification() if o.converged or o.status == "not_converged"
                      else (STABILITY["marginal"], 0) for o in orbits])
     samples = np.array([resample(o, o.samples) for o in orbits])
     times = np.array([o.times if len(o.times) == N else np.zeros(N) for o in orbits])
@@ -83,13 +85,16 @@ def orbits_dataset(orbits: list[PeriodicOrbit], status: str, message: str, confi
                                        "converged to a point (no orbit); not_converged: residual in `residual`",
                           "flag_values": np.array(list(STATUS.values()), np.int8), "flag_meanings": " ".join(STATUS)}),
         "stability": ("point", stab[:, 0].astype(np.int8),
-                      {"long_name": "stability by the nontrivial Floquet multipliers (|mu| < 1: stable)",
+                      {"long_name": "stability by the nontrivial Floquet multipliers (|mu| < 1: stable; marginal also "
+                                    "where the multipliers fail their check, flow_multiplier_error)",
                        "flag_values": np.array(list(STABILITY.values()), np.int8),
                        "flag_meanings": " ".join(STABILITY)}),
         "n_unstable": ("point", stab[:, 1].astype(np.int32),
                        {"units": "1", "long_name": "nontrivial multipliers outside the unit circle"}),
         "residual": ("point", clean([min(o.residual, 1e300) for o in orbits]),
-                     {"units": "1", "long_name": "max |phi(x_k, T/m) - x_(k+1)| / state_scale of the (last) iterate"}),
+                     {"units": "1", "long_name": "largest residual of the orbit equations / state_scale of the (last) "
+                                   "iterate: shooting max |phi(x_k, T/m) - x_(k+1)|, collocation max "
+                                   "|dx/dtau - T f(x)| at the Gauss points"}),
         "newton_iterations": ("point", np.array([o.iterations for o in orbits], np.int32),
                               {"units": "1", "long_name": "Newton steps"}),
         "multiplier_real": (("point", "floquet"), clean(mu.real),
@@ -123,6 +128,11 @@ def orbits_dataset(orbits: list[PeriodicOrbit], status: str, message: str, confi
                                   mixed_units("maximum over the orbit", "observable"))
         data["orbit_observables"] = (("point", "sample", "observable"), clean(obs),
                                      mixed_units("observables along the orbit", "observable"))
+    data["flow_multiplier_error"] = ("point", clean([min(o.flow_multiplier_error, 1e300) for o in orbits]), {
+        "units": "1", "long_name": "|mu - 1| of the flow direction's Floquet multiplier (the multipliers' check: "
+                                   f"above {TRIVIAL_TOL:g} and a tenth of the nontrivial ones' distance from the unit "
+                                   "circle they decide no stability)"})
+    data.update(_collocation_columns(orbits))
     if arclength is not None:
         data["arclength"] = ("point", np.asarray(arclength, float), {"units": "1", "long_name": "pseudo-arclength"})
     data.update(_special_table(list(special), system, orbits[0].parameter))
@@ -141,11 +151,32 @@ def orbits_dataset(orbits: list[PeriodicOrbit], status: str, message: str, confi
         coords.update(label_coordinates("observable", system.observables,
                                         [system.units_of(k) for k in system.observables], "observable"))
     config = {"system": system.name, "system_key": system.key, "description": system.description,
-              "heyoka_version": hy.__version__, **config}
+              "heyoka_version": hy.__version__, "method": orbits[0].method, **config}
     attrs = make_attrs("periodic_orbits", config, status, message, **system.attrs(orbits[0].pars),
-                       parameter=orbits[0].parameter or "", labels=" ".join(sp.label for sp in special),
+                       parameter=orbits[0].parameter or "", method=orbits[0].method,
+                       labels=" ".join(sp.label for sp in special),
                        n_orbits=int(sum(o.converged for o in orbits)))
     return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+def _collocation_columns(orbits: list[PeriodicOrbit]) -> dict:
+    """The estimated discretisation error and the mesh intervals of collocation orbits (none for shooting)."""
+    if not any(o.method == "collocation" and o.mesh is not None for o in orbits):
+        return {}
+    error = [o.discretisation_error if o.discretisation_error is not None else 1e300 for o in orbits]
+    return {
+        "discretisation_error": ("point", np.array(error),
+                                 {"units": "1", "long_name": "estimated largest error of x(t) / state_scale along the "
+                                                             "orbit (collocation; the period and the mesh values are "
+                                                             "more accurate)", "comment": "1e300: not estimated (a "
+                                                             "failed search)"}),
+        "multiplier_source": ("point", np.array([MULTIPLIER_SOURCES[o.multiplier_source] for o in orbits], np.int8),
+                              flag_attrs("the Floquet multipliers from the collocation equations, or from the "
+                                         "monodromy of the orbit corrected by shooting (where the collocation's fail "
+                                         "their check)", MULTIPLIER_SOURCES)),
+        "ntst": ("point", np.array([len(o.mesh) - 1 if o.mesh is not None else 0 for o in orbits], np.int32),
+                 {"units": "1", "long_name": "collocation mesh intervals of the orbit (0: a failed search)"}),
+    }
 
 
 def _special_table(special: list, system: System, parameter: str | None) -> dict:
@@ -189,10 +220,13 @@ def orbit_from_dataset(ds: xr.Dataset, point: int, system: System, *, max_iter: 
         raise ParameterError(f"point {point} is not a periodic orbit (orbit_status {status}); give a converged point")
     config = config_of(ds)
     pars = ds.runtime_parameters.values[point]
+    method = config.get("method", "shooting")
+    options = ({"ntst": int(config.get("ntst", 0)) or None, "ncol": int(config.get("ncol", 0)) or None}
+               if method == "collocation" else
+               {"segments": int(config.get("segments", 1)), "phase": config.get("phase", "poincare")})
     orbit = find_orbit(system, ds.initial_state.values[point], float(ds.period.values[point]),
-                       np.concatenate([pars, np.asarray(system.pars)[len(pars):]]),
-                       segments=int(config.get("segments", 1)), phase=config.get("phase", "poincare"),
-                       max_iter=max_iter)
+                       np.concatenate([pars, np.asarray(system.pars)[len(pars):]]), method=method, max_iter=max_iter,
+                       **options)
     parameter = ds.attrs.get("parameter") or None
     if parameter:
         orbit.parameter, orbit.value = parameter, float(orbit.pars[system.parameter_index(parameter)])

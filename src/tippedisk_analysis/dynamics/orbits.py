@@ -17,25 +17,28 @@ import numpy as np
 
 from ..errors import ParameterError
 from . import normal_forms
-from .flows import TAYLOR_TOL, Flow, FlowError, classify
-from .shooting import PeriodicOrbit, ShootingProblem
+from .flows import TAYLOR_TOL, Flow, FlowError
+from .discretisations import make_problem
+from .orbit_base import OrbitProblem, PeriodicOrbit, newton
 from .system import System
 
 NEWTON_TOL = 1e-10  # largest scaled Newton step at convergence
 NEWTON_MAX_ITER = 25
-MAX_NEWTON_STEP = 0.5  # largest Newton step in scaled unknowns (a trust region: no jumps along near-null directions)
 AMPLITUDE_TOL = 1e-7  # scaled amplitude below which a converged "orbit" is an equilibrium
 STATUS = {"converged": 0, "equilibrium": 1, "not_converged": 2, "nonfinite": 3}
 """int8 codes of ``orbit_status`` in periodic-orbit datasets."""
 
 
-def find_orbit(system: System, state, period: float, pars=None, *, segments: int = 1, phase: str = "poincare",
-               shift=None, tol: float = TAYLOR_TOL, newton_tol: float = NEWTON_TOL,
-               max_iter: int = NEWTON_MAX_ITER, amplitude_tol: float = AMPLITUDE_TOL, pinned=()) -> PeriodicOrbit:
+def find_orbit(system: System, state, period: float, pars=None, *, method: str = "shooting", tol: float = TAYLOR_TOL,
+               newton_tol: float = NEWTON_TOL, max_iter: int = NEWTON_MAX_ITER, amplitude_tol: float = AMPLITUDE_TOL,
+               pinned=(), **discretisation) -> PeriodicOrbit:
     """A periodic orbit near (``state``, ``period``) by Newton's method; always returns a status.
 
-    Gauss-Newton on the shooting equations with the phase condition fixed at the guess (least-squares
-    steps of at most MAX_NEWTON_STEP in scaled unknowns, halved while they increase the residual).
+    ``method``: ``shooting`` (``segments``, default 1; ``phase``: poincare or integral) or ``collocation``
+    (``ntst`` x ``ncol``, the mesh adapted to the integrated guess and again to the orbit found,
+    :mod:`.collocation`); ``discretisation``: the method's options (:mod:`.discretisations`). Gauss-Newton with
+    the phase condition fixed at the guess (least-squares steps of at most MAX_NEWTON_STEP in scaled unknowns,
+    halved while they increase the residual).
     Statuses: ``converged`` (a periodic orbit);
     ``equilibrium`` (Newton converged, or was converging, to a point: amplitude below ``amplitude_tol``
     -- an equilibrium is a solution of the shooting equations for every T, never an orbit);
@@ -48,46 +51,29 @@ def find_orbit(system: System, state, period: float, pars=None, *, segments: int
         raise ParameterError(f"the state guess must be {system.n} finite numbers ({', '.join(system.state_names)})")
     levels = integral_levels(system, state, pars) if system.integrals else None
     pins = {name: float(state[system.state_index(name)]) for name in pinned}
-    prob = ShootingProblem(system, pars, segments=segments, phase=phase, period_scale=float(period), shift=shift,
-                           tol=tol, levels=levels, pins=pins)
-    scale = prob.scale
+    prob = make_problem(method, system, pars, period_scale=float(period), tol=tol, levels=levels, pins=pins,
+                        **discretisation)
     try:
         u = prob.unknowns(state, float(period))
     except FlowError as exc:
         return _failed(prob, state, period, "nonfinite", f"the guess cannot be integrated: {exc}")
-    prob.set_reference(u)
-
-    def norm(F):
-        return float(np.linalg.norm(F)) if np.all(np.isfinite(F)) else math.inf
-
-    F = prob.residual(u)
-    if not np.isfinite(norm(F)):
-        return _failed(prob, state, period, "nonfinite", "the guess cannot be integrated over the period")
-    status, it = "not_converged", 0
-    for it in range(1, max_iter + 1):
-        A = prob.jacobian(u) * scale[None, :]
-        step = np.linalg.lstsq(A, -F, rcond=None)[0]
-        r0, lam = norm(F), min(1.0, MAX_NEWTON_STEP / max(np.max(np.abs(step)), 1e-300))
-        while True:
-            trial = u + lam * step * scale
-            F_trial = prob.residual(trial)
-            if norm(F_trial) <= max(r0, 1e-300) * (1 - 1e-4 * lam) or lam < 1e-4 or norm(F_trial) < 1e-12:
-                break
-            lam *= 0.5
-        if not np.isfinite(norm(F_trial)):
-            return _failed(prob, prob.split(u)[0][0], prob.split(u)[1], "nonfinite",
-                           f"the Newton iterate {it} left the domain of the equations (non-finite flow)")
-        u, F = trial, F_trial
-        if lam * np.max(np.abs(step)) <= newton_tol * (1.0 + np.max(np.abs(u / scale))):
-            A = prob.jacobian(u)
-            if np.all(np.abs(F) <= 1e-9 * (1.0 + np.abs(A) @ np.abs(u))):
-                status = "converged"
+    status, u, it, F = newton(prob, u, newton_tol, max_iter)
+    for _ in range(2 if method == "collocation" and status == "converged" else 0):
+        remeshed = prob.improved(u)  # the mesh of the orbit found (the guess's may differ): solve again on it
+        if remeshed is None:
             break
-    residual = float(np.max(np.abs(F[: system.n * prob.m]) / np.tile(system.state_scale, prob.m)))
+        status, u, more, F = newton(prob, remeshed, newton_tol, max_iter)
+        it += more
+    if status == "nonfinite":
+        return _failed(prob, prob.split(u)[0][0], prob.split(u)[1], "nonfinite",
+                       f"the Newton iterate {it} left the domain of the equations (non-finite flow)")
+    if status == "guess":
+        return _failed(prob, state, period, "nonfinite", "the guess cannot be integrated over the period")
     try:
-        orbit = prob.orbit(u, status, "", residual, it)
+        orbit = prob.orbit(u, status, "", None, it)
     except FlowError as exc:
         return _failed(prob, prob.split(u)[0][0], prob.split(u)[1], "nonfinite", str(exc))
+    residual = orbit.residual
     if orbit.amplitude < amplitude_tol:
         orbit.status = "equilibrium"
         orbit.message = (f"Newton {'converged' if status == 'converged' else 'was converging'} to an equilibrium "
@@ -96,25 +82,27 @@ def find_orbit(system: System, state, period: float, pars=None, *, segments: int
     elif status == "converged":
         k = _covering(prob, orbit)
         if k > 1:  # the guess went round k times: the orbit of the least period (its multipliers are mu^(1/k))
-            least = find_orbit(system, orbit.states[0], orbit.period / k, pars, segments=segments, phase=phase,
-                               shift=shift, tol=tol, newton_tol=newton_tol, max_iter=max_iter,
-                               amplitude_tol=amplitude_tol, pinned=pinned)
+            least = find_orbit(system, orbit.states[0], orbit.period / k, pars, method=method, tol=tol,
+                               newton_tol=newton_tol, max_iter=max_iter, amplitude_tol=amplitude_tol, pinned=pinned,
+                               **discretisation)
             if least.converged:
                 least.message += f" (the guess T = {period:.6g} went {k} times round it)"
                 return least
-        orbit.message = (f"periodic orbit, T = {orbit.period:.12g}, {it} Newton steps, residual {residual:.2g}; "
-                         f"{_stability_text(orbit)}")
+        error = (f", estimated discretisation error {orbit.discretisation_error:.2g}"
+                 if orbit.discretisation_error is not None else "")
+        orbit.message = (f"periodic orbit, T = {orbit.period:.12g}, {it} Newton steps, residual {residual:.2g}"
+                         f"{error}; {_stability_text(orbit)}")
     else:
-        orbit.message = (f"Newton did not converge in {it} steps: residual {residual:.3g} (max |phi(x_k, T/m) - "
-                         f"x_(k+1)| / scale) at T = {orbit.period:.6g}, amplitude {orbit.amplitude:.3g}; no periodic "
-                         "orbit near the guess")
+        orbit.message = (f"Newton did not converge in {it} steps: residual {residual:.3g} (of the {prob.method} "
+                         f"equations, per state scale) at T = {orbit.period:.6g}, amplitude {orbit.amplitude:.3g}; "
+                         "no periodic orbit near the guess")
     return orbit
 
 
 COVER_RTOL = 1e-6  # |x(T/k) - x(0)| / scale below this share of the amplitude: the orbit closes after T/k
 
 
-def _covering(prob: ShootingProblem, orbit: PeriodicOrbit, most: int = 7) -> int:
+def _covering(prob: OrbitProblem, orbit: PeriodicOrbit, most: int = 7) -> int:
     """The least k in 2 .. ``most`` for which the converged orbit closes after T/k already (1 if none): a
     solution of the shooting equations with k times the orbit's least period."""
     x0 = orbit.states[0]
@@ -130,7 +118,10 @@ def _covering(prob: ShootingProblem, orbit: PeriodicOrbit, most: int = 7) -> int
 
 
 def _stability_text(orbit: PeriodicOrbit) -> str:
-    flag, n_unstable = classify(orbit.multipliers, orbit.trivial)
+    flag, n_unstable = orbit.classification()
+    if not orbit.multipliers_reliable:
+        return (f"stability undecided: the multipliers fail their check (the flow direction's is off 1 by "
+                f"{orbit.flow_multiplier_error:.2g})")
     word = {0: "stable", 1: "marginal", 2: f"unstable ({n_unstable} multiplier(s) outside the unit circle)"}[flag]
     big = orbit.multipliers[~orbit.trivial]
     return f"{word}, largest nontrivial |multiplier| {np.abs(big).max(initial=0.0):.6g}"
@@ -145,11 +136,11 @@ def integral_levels(system: System, state, pars=None) -> dict:
     return dict(zip(system.integrals, map(float, values)))
 
 
-def _failed(prob: ShootingProblem, state, period, status, message) -> PeriodicOrbit:
+def _failed(prob: OrbitProblem, state, period, status, message) -> PeriodicOrbit:
     n = prob.n
     return PeriodicOrbit(status, message, prob.system, prob.pars.copy(), np.atleast_2d(state).copy(), float(period),
                          None, None, math.inf, 0, np.full(n, complex(math.nan)), np.zeros(n, bool), np.zeros(1),
-                         np.atleast_2d(state).copy(), np.zeros((1, len(prob.system.observables))))
+                         np.atleast_2d(state).copy(), np.zeros((1, len(prob.system.observables))), method=prob.method)
 
 
 def monodromy_fd(system: System, state, period: float, pars=None, h: float = 1e-6,

@@ -286,6 +286,19 @@ class System:
         J = out.T.reshape(-1, self.n, self.n)
         return J[0] if x.ndim == 1 else J
 
+    def linearisation_function(self, parameters=()):
+        """cfunc of f, d f / d x (row-major) and d f / d p for the runtime ``parameters`` (names or indices; row-major,
+        n * k) in one call over batches of states: n + n * n + n * k outputs (collocation)."""
+        indices = tuple(i if isinstance(i, int) else self.parameter_index(i) for i in parameters)
+
+        def build():
+            args = [*self.variables, *(hy.par[i] for i in indices)]
+            jac = np.asarray(hy.diff_tensors(list(self.rhs), diff_args=args, diff_order=1).jacobian)
+            outputs = [*self.rhs, *jac[:, : self.n].ravel(), *jac[:, self.n:].ravel()]
+            return hy.cfunc(outputs, list(self.variables))
+
+        return self._cached(("linearisation", indices), "the linearisation", build)
+
     def rhs_function(self):
         """cfunc of the right-hand side over the states."""
         return self._cached(("rhs",), "the right-hand side", lambda: hy.cfunc(list(self.rhs), list(self.variables)))
