@@ -20,14 +20,19 @@ HOMOCLINIC = 0.10550707004  # AUTO-07p's limit, confirmed by an independent scip
 MARKS = (0.125, 0.12)
 
 
-def timed(fn, repeat: int):
-    fn()  # warm: compiled code, AUTO-07p's transpiled executable
-    times, out = [], None
-    for _ in range(repeat):
-        t = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t)
-    return statistics.median(times), out
+def blocks(functions: dict, repeat: int, rounds: int = 2) -> dict:
+    """{name: (median seconds, last result, times)} of warm runs in blocks: each function once to warm up, then
+    ``rounds`` rounds of ``repeat`` runs of each in turn (a block, not run by run: AUTO-07p runs in a forked
+    process, and the page copies a fork leaves would slow the package's next run)."""
+    results = {name: fn() for name, fn in functions.items()}
+    times: dict = {name: [] for name in functions}
+    for _ in range(rounds):
+        for name, fn in functions.items():
+            for _ in range(repeat):
+                t = time.perf_counter()
+                results[name] = fn()
+                times[name].append(time.perf_counter() - t)
+    return {name: (statistics.median(times[name]), results[name], times[name]) for name in functions}
 
 
 def reference_period(ab, D: float) -> float:
@@ -41,30 +46,32 @@ def reference_period(ab, D: float) -> float:
     return orbit.period
 
 
-def package_runs(repeat: int) -> list[tuple]:
+RUNS = {"collocation, error control (ntst from 60)": {"method": "collocation", "ntst": 60, "ncol": 4},
+        "collocation, ntst fixed at 60": {"method": "collocation", "ntst": 60, "ncol": 4, "error_tol": math.inf},
+        "shooting (4 segments)": {"method": "shooting"}}
+
+
+def package_functions() -> dict:
     from tippedisk_analysis import dynamics as dy
 
     ab = dy.textbook_system("ab")
     value, state = dy.TEXTBOOK["ab"].start["hopf"]
     pars = ab.with_pars(D=value)
-    runs = [("collocation, error control (ntst from 60)", {"method": "collocation", "ntst": 60, "ncol": 4}),
-            ("collocation, ntst fixed at 60", {"method": "collocation", "ntst": 60, "ncol": 4,
-                                               "error_tol": math.inf}),
-            ("shooting (4 segments)", {"method": "shooting"})]
-    out = []
-    for name, keywords in runs:
-        t, ds = timed(lambda: dy.hopf_branch(ab, state, pars, "D", bounds=(0.0, 0.2), period_max=50.0, marks=MARKS,
-                                             **keywords), repeat)
-        labels = list(ds.special_label.values)
-        at = {float(ds.D.values[i]): float(ds.period.values[i]) for i, label in zip(ds.special_index.values, labels)
-              if label.startswith("UZ")}
-        limit = float(ds.special_limit.values[labels.index("HC1")]) if "HC1" in labels else math.nan
-        error = float(ds.discretisation_error.max()) if "discretisation_error" in ds else math.nan
-        out.append((name, t, ds.sizes["point"], at, limit, " ".join(labels), error))
-    return out
+    return {name: (lambda keywords=keywords: dy.hopf_branch(ab, state, pars, "D", bounds=(0.0, 0.2), period_max=50.0,
+                                                             marks=MARKS, **keywords))
+            for name, keywords in RUNS.items()}
 
 
-def auto_run(repeat: int):
+def package_row(ds) -> tuple:
+    labels = list(ds.special_label.values)
+    at = {float(ds.D.values[i]): float(ds.period.values[i]) for i, label in zip(ds.special_index.values, labels)
+          if label.startswith("UZ")}
+    limit = float(ds.special_limit.values[labels.index("HC1")]) if "HC1" in labels else math.nan
+    error = float(ds.discretisation_error.max()) if "discretisation_error" in ds else math.nan
+    return ds.sizes["point"], at, limit, " ".join(labels), error
+
+
+def auto_function():
     """AUTO-07p (bifpy, transpiled) from a small orbit at the Hopf point (bifpy starts no branch at a Hopf
     point): ntst 60, ncol 4, its default tolerances, user points at MARKS, stop at period 50."""
     import numpy as np
@@ -99,13 +106,17 @@ def auto_run(repeat: int):
         return auto.run(func, stpnt, settings, icu=[1, auto.PERIOD_INDEX], uzr={1: list(MARKS)},
                         uzstop={auto.PERIOD_INDEX: 50.0}, transpile=True)
 
-    t, result = timed(run, repeat)
+    return run
+
+
+def auto_row(result) -> tuple:
+    from bifpy import auto
+
     points = result.branches[0].points
     at = {float(p.parameters[0]): float(p.parameters[1]) for p in result.branches[0].labeled_points
           if p.point_type == auto.PointType.USER_SPECIFIED_VALUE and float(p.parameters[1]) < 49}
     kinds = " ".join(str(p.point_type).split(".")[-1] for p in result.branches[0].labeled_points)
-    last = points[-1]
-    return t, len(points), at, float(last.parameters[0]), kinds
+    return len(points), at, float(points[-1].parameters[0]), kinds
 
 
 def main() -> None:
@@ -122,27 +133,31 @@ def main() -> None:
     print("'ab' (B = 14, beta = 2) from the Hopf point D = 0.1309 to period 50; periods against shooting at 1e-14:")
     for D, T in reference.items():
         print(f"  D = {D}: T = {T:.12f}")
-    rows = package_runs(args.repeat)
+    functions = package_functions()
     try:
-        auto_row = auto_run(args.repeat)
+        functions["AUTO-07p"] = auto_function()
     except ImportError:
-        auto_row = None
         print("bifpy is not importable: AUTO-07p not run (apt-get install gfortran; pip install bifpy)")
-    for name, t, n, at, limit, labels, error in rows:
+    runs = blocks(functions, args.repeat)
+    for name in RUNS:
+        t, ds, _times = runs[name]
+        n, at, limit, labels, error = package_row(ds)
         errs = ", ".join(f"D = {D}: {at[D] - reference[D]:+.1e}" for D in MARKS)
-        print(f"package {name}: {n} orbits, {t * 1e3:.0f} ms (median of {args.repeat} warm runs); period errors "
-              f"{errs}; homoclinic limit {limit - HOMOCLINIC:+.1e}; largest estimated error {error:.1e}; {labels}")
-    if auto_row:
-        t, n, at, last, kinds = auto_row
+        print(f"package {name}: {n} orbits, {t * 1e3:.0f} ms (median of 2 x {args.repeat} warm runs); period errors "
+              f"{errs}; homoclinic limit {limit - HOMOCLINIC:+.1e}; largest estimated error {'not estimated' if math.isnan(error) else f'{error:.1e}'}; {labels}")
+    if "AUTO-07p" in runs:
+        t, result, times = runs["AUTO-07p"]
+        n, at, last, kinds = auto_row(result)
         parts = []
         for D, T in sorted(at.items(), reverse=True):
             near = min(MARKS, key=lambda m: abs(m - D))
             at_own_D = reference_period(ab, D)  # the period at the D AUTO-07p located, to separate the two errors
             parts.append(f"D = {D:.11f}: {T - reference[near]:+.1e} (at its own D {T - at_own_D:+.1e})")
-        print(f"AUTO-07p (bifpy, transpiled, ntst 60, ncol 4): {n} points, {t * 1e3:.0f} ms (median of "
+        print(f"AUTO-07p (bifpy, transpiled, ntst 60, ncol 4): {n} points, {t * 1e3:.0f} ms (median of 2 x "
               f"{args.repeat} warm runs); period errors {'; '.join(parts)}; last D {last - HOMOCLINIC:+.1e} from the "
               f"homoclinic limit; labels {kinds}")
-
+        ours = runs[next(iter(RUNS))][0]
+        print(f"time of the package's default over AUTO-07p's: {ours / t:.2f} x")
 
 if __name__ == "__main__":
     main()

@@ -35,11 +35,10 @@ import math
 
 import numpy as np
 import scipy.linalg
-from scipy import sparse
 
 from ..errors import ParameterError
 from .collocation_mesh import Mesh
-from .collocation_solver import Factorisation, Linearisation, assemble
+from .collocation_solver import Factorisation, Linearisation, assemble, sparse_jacobian
 from .flows import TAYLOR_TOL, Flow, FlowError, floquet
 from .orbit_base import (N_SAMPLES, OrbitProblem, PeriodicOrbit, flow_multiplier_error, multipliers_decide, newton,
                          orbit_size)
@@ -98,10 +97,11 @@ class CollocationProblem(OrbitProblem):
         self.period_scale, self.parameter_scale = float(period_scale), float(parameter_scale)
         self.flow = Flow(system, tol)
         self._linearisation = system.linearisation_function(() if self.p_index is None else (self.p_index,))
+        self._rhs = system.rhs_function()
+        self._tiled = None  # (parameters, points, count) and the parameters tiled over the Gauss points
         self._memo: dict = {}
         self._spectra: dict = {}  # (u, mesh) -> the multipliers of an orbit evaluated before
         self._shooting = None  # the single-shooting problem that checks orbits whose multipliers fail
-        self._structure_of = None  # the ntst of the sparse pattern of jacobian()
         self._phase = np.zeros(0)
         self.use(self.mesh)
 
@@ -237,36 +237,6 @@ class CollocationProblem(OrbitProblem):
     def _integrated(self, state, period: float, pars) -> np.ndarray:
         return self.flow.trajectory(state, period * self.mesh.times, pars)
 
-    # -- the sparse structure (it depends on ntst, ncol and n only: a new mesh of as many intervals changes the
-    # values)
-    def _structure(self) -> None:
-        mesh, n, x0 = self.mesh, self.n, self.x_start
-        ntst, m, N = mesh.ntst, mesh.m, mesh.n_nodes
-        n_coll = ntst * m * n
-        j, k, a, i, b = np.ix_(range(ntst), range(m), range(n), range(m + 1), range(n))
-        block_rows = np.broadcast_to((j * m + k) * n + a, (ntst, m, n, m + 1, n))
-        block_cols = np.broadcast_to(x0 + mesh.intervals[j, i] * n + b, (ntst, m, n, m + 1, n))
-        coll = np.arange(n_coll)
-        rows = [block_rows.ravel(), coll]
-        cols = [block_cols.ravel(), np.full(n_coll, self.t_index)]
-        if self.p_index is not None:
-            rows.append(coll)
-            cols.append(np.full(n_coll, self.t_index + 1))
-        rows.append(np.full(N * n, n_coll))  # the phase row
-        cols.append(x0 + np.arange(N * n))
-        k_lev = len(self.level_names)
-        level_rows = n_coll + 1 + np.arange(k_lev)
-        rows.append(np.repeat(level_rows, n))
-        cols.append(np.tile(x0 + np.arange(n), k_lev))
-        if self.level_parameter:
-            rows.append(level_rows)
-            cols.append(np.full(k_lev, self.t_index + 1))
-        rows, cols = np.concatenate(rows), np.concatenate(cols)
-        order = sparse.coo_matrix((np.arange(1.0, len(rows) + 1), (rows, cols)), shape=self.shape).tocsc()
-        self._order = order.data.astype(np.int64) - 1
-        self._indices, self._indptr = order.indices, order.indptr
-        self._structure_of = ntst
-
     # -- evaluation
     def _key(self, u) -> tuple:
         """u and the mesh it refers to (the memo's and the multipliers' key)."""
@@ -290,7 +260,7 @@ class CollocationProblem(OrbitProblem):
         if not (math.isfinite(T) and T > 0) or not np.all(np.isfinite(X)):
             return {"error": f"the period T = {T:.6g} is not positive" if not T > 0 else "non-finite node states"}
         xz, dxz = mesh.at_gauss(X)
-        lin = self.system.evaluate(self._linearisation, xz.reshape(-1, n).T, pars).T
+        lin = self._at_gauss_points(self._linearisation, xz, pars)
         if not np.all(np.isfinite(lin)):
             return {"error": "the right-hand side is not finite on the orbit"}
         f = lin[:, :n].reshape(xz.shape)
@@ -385,9 +355,20 @@ class CollocationProblem(OrbitProblem):
         if not (math.isfinite(T) and T > 0) or not np.all(np.isfinite(X)):
             return np.full(self.shape[0], np.nan)
         xz, dxz = self.mesh.at_gauss(X)
-        f = self.system.evaluate(self.system.rhs_function(), xz.reshape(-1, self.n).T, self.runtime(u)).T
+        f = self._at_gauss_points(self._rhs, xz, self.runtime(u))
         levels = self.level_rows(u, X[0])[0]
         return np.concatenate([(dxz - T * f.reshape(xz.shape)).ravel(), [self._phase @ X.ravel()], levels])
+
+    def _at_gauss_points(self, function, xz: np.ndarray, pars: np.ndarray) -> np.ndarray:
+        """A compiled function of the System at the Gauss points (ntst, m, n): (ntst m, outputs); the parameters
+        tiled once per parameter vector and mesh size."""
+        states = np.ascontiguousarray(xz.reshape(-1, self.n).T)
+        if function.nparams == 0:
+            return function(states).T
+        key = (pars.tobytes(), states.shape[1], function.nparams)
+        if self._tiled is None or self._tiled[0] != key:
+            self._tiled = key, np.ascontiguousarray(np.repeat(pars[: function.nparams, None], states.shape[1], axis=1))
+        return function(states, pars=self._tiled[1]).T
 
     def _residual_of(self, ev: dict) -> np.ndarray:
         """The residual of an evaluation with the present phase condition (set_reference changes it)."""
@@ -412,21 +393,10 @@ class CollocationProblem(OrbitProblem):
 
     def jacobian(self, u):
         """The Jacobian as a scipy sparse matrix (for inspection; Newton solves with :meth:`linearise`)."""
-        if self._structure_of != self.mesh.ntst:
-            self._structure()
         ev = self._evaluate(u)
         if "error" in ev:
-            return sparse.csc_matrix((np.full(len(self._order), np.nan), self._indices, self._indptr),
-                                     shape=self.shape)
-        parts = [ev["blocks"].reshape(self.mesh.ntst, self.mesh.m, self.n, -1, self.n).ravel(),
-                 ev["extras"][:, :, 0].ravel()]
-        if self.p_index is not None:
-            parts.append(ev["extras"][:, :, 1].ravel())
-        parts += [self._phase, ev["level_rows"][:, self.x_start:self.x_start + self.n].ravel()]
-        if self.level_parameter:
-            parts.append(ev["level_rows"][:, self.t_index + 1])
-        data = np.concatenate(parts)[self._order]
-        return sparse.csc_matrix((data, self._indices, self._indptr), shape=self.shape)
+            raise FlowError(ev["error"])
+        return sparse_jacobian(ev["blocks"], ev["extras"], self._borders(ev), self.mesh, self.n, self.x_start)
 
     def set_reference(self, u) -> None:
         """The phase condition relative to the orbit u (its derivative at the Gauss points, scaled)."""
@@ -470,18 +440,24 @@ class CollocationProblem(OrbitProblem):
     def orbit(self, u, status: str = "converged", message: str = "", residual: float | None = None,
               iterations: int = 0, n_samples: int = N_SAMPLES, discretisation: Mesh | None = None) -> PeriodicOrbit:
         """The orbit at u (on ``discretisation``, the point's mesh, default the current one) with samples,
-        multipliers and the estimated discretisation error."""
+        multipliers and the estimated discretisation error (a point of a branch keeps the multipliers computed
+        when it was accepted)."""
         if discretisation is not None and discretisation is not self.mesh:
             self.use(discretisation)
         X, T, p = self.split(u)
-        ev = self._evaluate(u)
-        if "error" in ev:
-            raise FlowError(ev["error"])
-        pars = ev["pars"]
-        mu, trivial = self.floquet(ev)
+        pars = self.runtime(u)
+        known = self._spectra.get(self._key(u))
+        if known is None:
+            ev = self._evaluate(u)
+            if "error" in ev:
+                raise FlowError(ev["error"])
+            known = (ev["eig"], ev["multiplier_source"])
+        eig, source = known[0], known[1]
+        f0 = self.system.f(X[0], pars)
+        mu, trivial = floquet(None, f0, self.system.n_trivial, eig)
         samples = self.mesh.evaluate(X, np.arange(n_samples) / n_samples)
         if residual is None:
-            residual = float(np.max(np.abs(ev["collocation"].reshape(-1, self.n))
+            residual = float(np.max(np.abs(self.residual(u)[: self.n_collocation].reshape(-1, self.n))
                                     / np.asarray(self.system.state_scale)))
         observables = (self.flow.observables(samples.T, pars).T if self.system.observables
                        else np.empty((n_samples, 0)))
@@ -489,5 +465,5 @@ class CollocationProblem(OrbitProblem):
                              mu, trivial, T * np.arange(n_samples) / n_samples, samples, observables,
                              method="collocation",
                              discretisation_error=self.mesh.error_estimate(X, self.system.state_scale),
-                             mesh=self.mesh.tau.copy(), flow_multiplier_error=self.flow_multiplier_error(u),
-                             multiplier_source=ev["multiplier_source"])
+                             mesh=self.mesh.tau.copy(), flow_multiplier_error=flow_multiplier_error(eig, f0),
+                             multiplier_source=source)

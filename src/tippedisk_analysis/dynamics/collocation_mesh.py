@@ -95,8 +95,12 @@ class Mesh:
         return cls(np.linspace(0.0, 1.0, int(ntst) + 1), m)
 
     def pieces(self, X: np.ndarray) -> np.ndarray:
-        """The node values of each interval, (ntst, m+1, n), from node values X (n_nodes, n)."""
-        return X[self.intervals]
+        """The node values of each interval, (ntst, m+1, n), from node values X (n_nodes, n): a strided view of X
+        with its first node appended (neighbouring intervals share a node)."""
+        closed = np.concatenate([X, X[:1]])
+        rows, cols = closed.strides
+        return np.lib.stride_tricks.as_strided(closed, (self.ntst, self.m + 1, X.shape[1]), (self.m * rows, rows, cols),
+                                               writeable=False)
 
     def at_gauss(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """x and dx/dtau at the Gauss points, each (ntst, m, n)."""

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit
+from scipy import sparse
 
 RANK_TOL = 1e-10  # singular values of the last stage below this share of the largest count as zero: the level rows of
 # a family make it rank deficient, the discretisation only nearly so
@@ -47,13 +48,13 @@ def assemble(J, h, T, at_gauss, slope_at_gauss):
 
 
 @njit(cache=True)
-def _eliminate(rows, first, count, border, factors):
+def _eliminate(rows, first, count, border, factors, pivots, multipliers):
     """Gaussian elimination with partial pivoting of columns first .. first + count - 1 of ``rows`` (r x c) in place:
-    the first ``count`` rows become the pivot rows (upper triangular there), the others have zeros there. Returns
-    (pivots, multipliers); the border rows (k x c) lose those columns too, ``factors`` (k x count) record how."""
+    the first ``count`` rows become the pivot rows (upper triangular there), the others have zeros there; the row
+    swaps go to ``pivots`` (count), the multipliers to ``multipliers`` (r x count). The border rows (k x c) lose
+    those columns too, ``factors`` (k x count) record how."""
     r = rows.shape[0]
-    pivots = np.empty(count, np.int64)
-    multipliers = np.zeros((r, count))
+    multipliers[:] = 0.0
     for k in range(count):
         col = first + k
         best, p = -1.0, k
@@ -83,7 +84,6 @@ def _eliminate(rows, first, count, border, factors):
             if f != 0.0:
                 for c in range(rows.shape[1]):
                     border[i, c] -= f * rows[k, c]
-    return pivots, multipliers
 
 
 @njit(cache=True)
@@ -121,17 +121,17 @@ def factorise(blocks, extras, border_nodes, border_extras, m):
                 bord[i, j * n + a] = border_nodes[i, j * m, a]
         for k in range(q):
             bord[i, ntst * n + k] = border_extras[i, k]
+    rows = np.empty((mn, width + q))
+    local = np.zeros((b, width + q))  # the border rows on one interval's columns
     for j in range(ntst):
-        rows = np.empty((mn, width + q))
         rows[:, :width] = blocks[j]
         rows[:, width:] = extras[j]
-        local = np.zeros((b, width + q))  # the border rows on this interval's columns
+        local[:] = 0.0
         for i in range(b):
             for s in range(1, m):
                 for a in range(n):
                     local[i, s * n + a] = border_nodes[i, j * m + s, a]
-        pivots, multipliers = _eliminate(rows, n, inner, local, fac1[j])
-        piv1[j], mul1[j] = pivots, multipliers
+        _eliminate(rows, n, inner, local, fac1[j], piv1[j], mul1[j])
         top1[j] = rows[:inner]
         cond[j, :, :n] = 0.0
         cond[j, :, n:2 * n] = rows[inner:, :n]
@@ -153,14 +153,15 @@ def factorise(blocks, extras, border_nodes, border_extras, m):
     mul2 = np.zeros((ntst, 2 * n, n))
     top2 = np.zeros((ntst, n, 3 * n + q))
     fac2 = np.zeros((ntst, b, n))
+    stack = np.zeros((2 * n, 3 * n + q))
+    local = np.zeros((b, 3 * n + q))  # border columns [x_0 | x_j | x_j+1 | e]
     for j in range(1, ntst):
-        stack = np.zeros((2 * n, 3 * n + q))
+        stack[:] = 0.0
         stack[:n, :n] = rel[:, :n]
         stack[:n, n:2 * n] = rel[:, n:2 * n]
         stack[:n, 3 * n:] = rel[:, 3 * n:]
         stack[n:, n:] = cond[j, :, n:]
         nxt = (j + 1) % ntst
-        local = np.zeros((b, 3 * n + q))  # border columns [x_0 | x_j | x_j+1 | e]
         for i in range(b):
             for a in range(n):
                 local[i, a] = bord[i, a]
@@ -168,8 +169,7 @@ def factorise(blocks, extras, border_nodes, border_extras, m):
                 local[i, 2 * n + a] = bord[i, nxt * n + a] if nxt != 0 else 0.0
             for k in range(q):
                 local[i, 3 * n + k] = bord[i, ntst * n + k]
-        pivots, multipliers = _eliminate(stack, n, n, local, fac2[j])
-        piv2[j], mul2[j] = pivots, multipliers
+        _eliminate(stack, n, n, local, fac2[j], piv2[j], mul2[j])
         top2[j] = stack[:n]
         rel[:, :n] = stack[n:, :n]
         rel[:, n:2 * n] = stack[n:, 2 * n:3 * n]
@@ -335,3 +335,22 @@ class Linearisation:
         pieces = u[k:].reshape(-1, self.n)[self.mesh.intervals].reshape(self.mesh.ntst, -1)
         coll = np.einsum("jrc,jc->jr", np.abs(self.blocks), pieces) + np.abs(self.extras) @ u[:k]
         return np.concatenate([coll.ravel(), np.abs(self.borders) @ u])
+
+
+def sparse_jacobian(blocks, extras, borders, mesh, n: int, x_start: int):
+    """The same system as a scipy sparse matrix (CSC; rows: collocation, then the borders), for inspection."""
+    ntst, m = mesh.ntst, mesh.m
+    n_coll = ntst * m * n
+    j, k, a, i, b = np.ix_(range(ntst), range(m), range(n), range(m + 1), range(n))
+    rows = np.broadcast_to((j * m + k) * n + a, (ntst, m, n, m + 1, n)).ravel()
+    cols = np.broadcast_to(x_start + mesh.intervals[j, i] * n + b, (ntst, m, n, m + 1, n)).ravel()
+    q = extras.shape[2]
+    extra_rows = np.repeat(np.arange(n_coll), q)
+    extra_cols = np.tile(np.arange(q), n_coll)
+    border_rows, border_cols = np.nonzero(borders)
+    A = sparse.coo_matrix((np.concatenate([blocks.ravel(), extras.reshape(n_coll, q).ravel(),
+                                           borders[border_rows, border_cols]]),
+                           (np.concatenate([rows, extra_rows, n_coll + border_rows]),
+                            np.concatenate([cols, extra_cols, border_cols]))),
+                          shape=(n_coll + len(borders), x_start + n_coll))
+    return A.tocsc()

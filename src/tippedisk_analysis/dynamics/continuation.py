@@ -122,10 +122,11 @@ def _step_to(problem, point: Point, sigma: float, options: Options) -> np.ndarra
     return _step(problem, point, sigma, options)[0]
 
 
-def _step(problem, point: Point, sigma: float, options: Options) -> tuple[np.ndarray | None, int]:
-    """(u, corrector iterations) at scaled arclength sigma beyond ``point``."""
+def _step(problem, point: Point, sigma: float, options: Options, guess: np.ndarray | None = None):
+    """(u, corrector iterations) at scaled arclength sigma beyond ``point``, from the predictor or ``guess``."""
     v0 = point.u / problem.scale
-    return correct(problem, (v0 + sigma * point.tangent) * problem.scale, (point.tangent, v0, sigma), options)
+    start = (v0 + sigma * point.tangent) * problem.scale if guess is None else guess
+    return correct(problem, start, (point.tangent, v0, sigma), options)
 
 
 def _make_point(problem, u, previous_tangent, arclength, iterations, special="") -> Point:
@@ -163,7 +164,7 @@ def continue_branch(problem: Problem, u0: np.ndarray, options: Options = Options
     points = [Point(u, t, 0.0, problem.state_eigenvalues(u), iterations, "", problem.discretisation())]
     special: list[SpecialPoint] = []
     dropped: list[str] = []  # test-function sign changes that were not zeros
-    ds, status, message, refinements, base = abs(options.ds), "completed", "", 0, None
+    ds, status, message, refinements, base, guess = abs(options.ds), "completed", "", 0, None, None
     first = problem.parameters[0]
     while True:
         if len(points) >= options.max_points:
@@ -176,7 +177,8 @@ def continue_branch(problem: Problem, u0: np.ndarray, options: Options = Options
                                           "explosion; raise ds_max or continue in another parameter)")
             break
         last = base or points[-1]  # the last point, or that point carried to a new discretisation
-        u_new, iterations = _step(problem, last, ds, options)
+        u_new, iterations = _step(problem, last, ds, options, guess)
+        guess = None
         if u_new is None:
             ds *= 0.5
             if ds < options.ds_min:
@@ -189,6 +191,10 @@ def continue_branch(problem: Problem, u0: np.ndarray, options: Options = Options
             refinements += 1
             if refinements > MAX_REFINEMENTS:  # the orbit changes too much over the step for any mesh: shorten it
                 ds *= 0.5
+            else:  # from the rejected solution carried over (a far better guess than the predictor)
+                rejected = Point(u_new, last.tangent, last.arclength + ds, last.eigenvalues, iterations, "",
+                                 last.discretisation)
+                guess = problem.carry(rejected)[0]
             base = _carried(problem, last, problem.carry(last))
             continue
         refinements = 0
