@@ -82,8 +82,9 @@ L1_DEGENERATE = 1e-9  # |l1| below this share of the size of its terms: zero to 
 
 def first_lyapunov_coefficient(J: np.ndarray, B: np.ndarray, C: np.ndarray) -> dict:
     """Hopf point of an isolated equilibrium: frequency omega and l1 (Kuznetsov (3.20), n-dim form); ``scale``:
-    the size of its terms, (sum of their moduli) / (2 omega); ``degenerate``: |l1| <= L1_DEGENERATE scale (l1
-    vanishes to round-off: a generalised Hopf point, or a centre where the system is conservative)."""
+    the size of its terms, (sum of their moduli) / (2 omega); ``degenerate``: |l1| <= L1_DEGENERATE max(scale,
+    omega) (l1 vanishes to round-off: a generalised Hopf point, a centre where the system is conservative, or a
+    linear one where every nonlinear term vanishes, as van der Pol's at mu = 0)."""
     omega, q, p, lam = _critical_pair(J)
     n = J.shape[0]
     qb = np.conj(q)
@@ -91,7 +92,8 @@ def first_lyapunov_coefficient(J: np.ndarray, B: np.ndarray, C: np.ndarray) -> d
     h20 = np.linalg.solve(2j * omega * np.eye(n) - J, bilinear(B, q, q))
     terms = (np.vdot(p, trilinear(C, q, q, qb)), -2 * np.vdot(p, bilinear(B, q, h11)), np.vdot(p, bilinear(B, qb, h20)))
     l1, scale = float(sum(terms).real / (2 * omega)), float(sum(map(abs, terms)) / (2 * omega))
-    return {"l1": l1, "scale": scale, "degenerate": abs(l1) <= L1_DEGENERATE * scale, "frequency": omega,
+    degenerate = abs(l1) <= L1_DEGENERATE * max(scale, omega)  # terms that all vanish (a linear centre) too
+    return {"l1": l1, "scale": scale, "degenerate": degenerate, "frequency": omega,
             "eigenvalue": lam, "q": q, "p": p}
 
 

@@ -240,9 +240,13 @@ def hopf_start(system: System, state, pars, parameter: str, *, method: str = DEF
                          "(the corrector failed for every first step); check that it is a Hopf point")
 
 
+VERTICAL_SPAN = 1e-6  # a branch from a Hopf point whose parameter moves less than this (relative) is looked at
+
+
 def _explain_stall(system: System, state, pars, parameter: str, br: continuation.Branch) -> None:
-    """A branch from a Hopf point that stalled at its parameter value: if the point is degenerate (l1 = 0 to
-    round-off) the orbits form a vertical family there (status ``degenerate``), not a branch in the parameter."""
+    """A branch from a Hopf point that stalled, failed or barely moved at its parameter value: if the point is
+    degenerate (l1 = 0 to round-off) the orbits form a vertical family there (status ``degenerate``), not a
+    branch in the parameter."""
     J, B, C = (system.field().tensor(state, pars, k, with_parameters=False) for k in (1, 2, 3))
     nf = normal_forms.first_lyapunov_coefficient(J, B, C)
     if not nf["degenerate"]:
@@ -252,7 +256,7 @@ def _explain_stall(system: System, state, pars, parameter: str, br: continuation
     br.message = (f"the Hopf point at {parameter} = {value:.10g} is degenerate (l1 = {nf['l1']:.2g}, its terms "
                   f"{nf['scale']:.2g}): the orbits form a vertical family at that value (a centre, as where the "
                   f"system is conservative) and no branch in {parameter} emanates; the {len(br.points)} orbits "
-                  "computed lie on that family")
+                  "computed lie on that family (start from an orbit off the point: find_orbit, continue_orbits)")
 
 
 def orbit_branch(system: System, branch: xr.Dataset, label: str, *, bounds, method: str = DEFAULT_METHOD,
@@ -296,8 +300,10 @@ def hopf_branch(system: System, state, pars, parameter: str, *, bounds, method: 
                                   **discretisation)
     br = continuation.continue_branch(prob, u, options, tangent=tangent, marks=marks)
     _mark_homoclinic(prob, br)
-    if br.status == "stalled":
-        _explain_stall(system, state, pars, parameter, br)
+    values = np.array([prob.split(p.u)[2] for p in br.points])
+    hopf_value = pars[system.parameter_index(parameter)]
+    if br.status in ("stalled", "corrector_failed") or np.ptp(values) <= VERTICAL_SPAN * (1 + abs(hopf_value)):
+        _explain_stall(system, state, pars, parameter, br)  # a vertical family at a degenerate Hopf point?
     return branch_dataset(prob, br, {"source": "hopf", **(config or {}), "hopf_state": list(map(float, state)),
                                      "hopf_value": float(pars[system.parameter_index(parameter)]),
                                      "system_key": system.key}, n_samples)
