@@ -112,6 +112,12 @@ def _cell(text: str) -> str:
     return " ".join(str(text).split()).replace("|", "\\|")
 
 
+def _api_examples() -> dict:
+    namespace: dict = {}
+    exec((HERE / "api_examples.py").read_text(), namespace)
+    return namespace["EXAMPLES"]
+
+
 def _api_pages() -> dict:
     """{path: text}: the overview of the public modules and one page per module (every name in its
     ``__all__`` with its docstring)."""
@@ -120,12 +126,15 @@ def _api_pages() -> dict:
                 "module. Modules not listed here (the analysis modules' helpers, models, the CLI) are internal.", "",
                 "| module | contents |", "|---|---|"]
     pages = {}
+    examples = _api_examples()
     for module_name, title in API_MODULES:
         module = importlib.import_module(module_name)
         slug = module_name.replace("tippedisk_analysis", "td").replace(".", "_")
         overview.append(f"| [`{module_name}`](api/{slug}.md) | {title} |")
         summary = (module.__doc__ or "").strip().split("\n\n")[0]
         lines = [f"# {title}", "", f"`{module_name}`: {summary}", ""]
+        if module_name in examples:  # docs/api_examples.py (tests/test_docs.py runs each)
+            lines += ["Example:", "", "```python", examples[module_name].strip(), "```", ""]
         for name in module.__all__:
             obj = getattr(module, name)
             if name.startswith("__") or not callable(obj):

@@ -42,6 +42,32 @@ def test_the_examples_of_a_page_run(page, tmp_path, monkeypatch):
         assert ds.attrs.get("status") not in BAD, f"{page}: {name} ended {ds.attrs.get('status')}"
 
 
+def _api_examples() -> dict:
+    namespace: dict = {}
+    exec((DOCS / "api_examples.py").read_text(), namespace)
+    return namespace["EXAMPLES"]
+
+
+def test_every_module_of_the_api_reference_has_an_example():
+    source = (DOCS / "conf.py").read_text()
+    modules = re.findall(r'^\s+\("(tippedisk_analysis[\w.]*)", "', source[source.index("API_MODULES"):], re.M)
+    assert modules and set(modules) == set(_api_examples())
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("module", sorted(_api_examples()))
+def test_the_api_examples_run(module, tmp_path, monkeypatch):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    monkeypatch.chdir(tmp_path)
+    namespace: dict = {}
+    exec(compile(_api_examples()[module], f"docs/api_examples.py:{module}", "exec"), namespace)
+    datasets = {k: v for k, v in namespace.items() if isinstance(v, xr.Dataset)}
+    for name, ds in datasets.items():
+        assert ds.attrs.get("status") not in BAD, f"{module}: {name} ended {ds.attrs.get('status')}"
+
+
 def test_the_readme_links_resolve():
     root = DOCS.parent
     text = (root / "README.md").read_text()
