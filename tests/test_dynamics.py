@@ -138,6 +138,18 @@ def test_a_bad_declaration_is_one_line_naming_the_clash(make, fragment):
     assert "\n" not in str(info.value)
 
 
+
+
+def test_states_given_as_rows_are_refused_not_misread():
+    """(N, n) rows, the layout of propagate_grid, would be read as n states of N entries: refused, with the fix."""
+    system = ab_system("ab_rows")
+    rows = np.tile([0.1, 0.2], (5, 1))
+    with pytest.raises(td.ParameterError, match=r"states of shape \(5, 2\); give \(2,\) or \(2, N\)") as info:
+        system.f(rows)
+    assert "transpose" in str(info.value) and "\n" not in str(info.value)
+    np.testing.assert_allclose(system.f(rows.T), np.tile(system.f(rows[0])[:, None], (1, 5)))
+    with pytest.raises(td.ParameterError, match="states of shape"):
+        system.f(np.zeros(4))
 # ---------------------------------------------------------------- periodic orbits from the Hopf point
 AUTO_PERIODS = {0.125: 1.8641832388, 0.12: 2.6727661404, 0.1168: 5.7046181435}
 """AUTO-07p (bifpy 0.3.0, NTST = 100-200, EPSS = 1e-10) on 'ab' with B = 14, beta = 2: the periods at user

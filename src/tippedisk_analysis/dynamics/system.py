@@ -325,6 +325,9 @@ class System:
     def evaluate(self, function, states, pars) -> np.ndarray:
         """A cfunc of this system at states (n,) or (n, N) with pars (p,) or (p, N): (outputs,) or (outputs, N)."""
         x = np.asarray(states, dtype=float)
+        if x.ndim not in (1, 2) or x.shape[0] != self.n or (x.ndim == 1 and x.size != self.n):
+            raise ParameterError(f"system {self.name!r}: states of shape {x.shape}; give ({self.n},) or ({self.n}, N), "
+                                 f"one state per column (transpose an (N, {self.n}) array of rows)")
         X = np.ascontiguousarray(x.reshape(self.n, -1))
         if function.nparams == 0:
             out = function(X)

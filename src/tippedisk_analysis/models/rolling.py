@@ -53,17 +53,25 @@ class RollingDynamics:
     euler_rates: list  # alpha_dot, beta_dot, gamma_dot [rad/s]
     lambda_N: object  # normal contact force [N]
     lambda_T: list  # tangential contact force, I-frame x, y [N]
+    lambda_T_G: list  # the same, G-frame components [N]
     cone_margin: object  # mu lambda_N - |lambda_T| [N]
+    friction_power: object  # lambda_T . s, the power of the contact force [W] (0 when rolling)
     energies: dict  # E_kin, E_pot [J]
     z_S: object
     g_N1: object
 
 
-def rolling_dynamics(trig: Trig, omega) -> RollingDynamics:
+def rolling_dynamics(trig: Trig, omega, slip=None, *, pars=P, sqrt=hy.sqrt) -> RollingDynamics:
     """The rolling disk's accelerations and contact force at orientation ``trig``, body angular velocity
-    ``omega`` (module docstring). Vectors in G-components unless named _B/_I."""
-    m, e, r, g = P["m"], P["e"], P["r"], P["gravity"]
-    A, B, C = P["A"], P["B"] - m * e * e, P["C"] - m * e * e  # Theta_S in the body frame
+    ``omega`` (module docstring). Vectors in G-components unless named _B/_I.
+
+    slip: (s, s_dot), a prescribed horizontal velocity s of the material point at C1 and its time derivative
+    (both G-components; s_dot the derivative of the vector s in the inertial frame), for the slow flow of
+    :mod:`.slow_flow`: then v_G = s - Omega x r_GC1 and a_S = Psi x d + b + s_dot. Default: rolling, s = 0.
+    pars, sqrt: the parameters by name and the square root, heyoka's by default; sympy symbols and sympy.sqrt
+    give the same expressions in sympy (:mod:`tippedisk_analysis.analysis.critical_spin`)."""
+    m, e, r, g = pars["m"], pars["e"], pars["r"], pars["gravity"]
+    A, B, C = pars["A"], pars["B"] - m * e * e, pars["C"] - m * e * e  # Theta_S in the body frame
     sb, cb, sg, cg = trig.sb, trig.cb, trig.sg, trig.cg
     ez_I = [0.0, sb, cb]
     W = trig.G_from_B(omega)
@@ -74,11 +82,15 @@ def rolling_dynamics(trig: Trig, omega) -> RollingDynamics:
     r_GS = [e * cg, e * sg, 0.0]
     d = [e * cg, e * sg + r, 0.0]  # r_C1S = r_GS - r_GC1
     v_G = [-r * W[2], 0.0, r * W[0]]  # -Omega x r_GC1
+    if slip is not None:
+        v_G = [u + v for u, v in zip(v_G, slip[0])]
 
     # Theta_S in G-components: the body frame turned by gamma about e_z^G
     t00, t01, t11 = A * cg * cg + B * sg * sg, (A - B) * cg * sg, A * sg * sg + B * cg * cg
     L = [t00 * W[0] + t01 * W[1], t01 * W[0] + t11 * W[1], C * W[2]]
     b = [u - v for u, v in zip(cross(W, cross(W, r_GS)), cross(W, cross(w_G, r_GC)))]
+    if slip is not None:
+        b = [u + v for u, v in zip(b, slip[1])]
     load = [b[i] + g * ez_I[i] for i in range(3)]
     rhs = [-u - m * v for u, v in zip(cross(W, L), cross(d, load))]
     # M = Theta_S + m (|d|^2 I - d d^T): block diagonal
@@ -92,14 +104,16 @@ def rolling_dynamics(trig: Trig, omega) -> RollingDynamics:
     lambda_T = trig.I_from_G(lambda_T_G)[:2]
     v_S = [v_G[i] + c for i, c in enumerate(cross(W, r_GS))]
     z_S = r * sb + e * sb * sg
-    L_B = [P["A"] * omega[0], (P["B"] - m * e * e) * omega[1], (P["C"] - m * e * e) * omega[2]]
+    L_B = [A * omega[0], B * omega[1], C * omega[2]]
     return RollingDynamics(
         v_G=trig.I_from_G(v_G),
         psi=trig.B_from_G(psi_G),
         euler_rates=[alpha_d, W[0], gamma_d],
         lambda_N=lambda_N,
         lambda_T=lambda_T,
-        cone_margin=P["mu"] * lambda_N - hy.sqrt(dot(lambda_T_G, lambda_T_G)),
+        lambda_T_G=lambda_T_G,
+        cone_margin=pars["mu"] * lambda_N - sqrt(dot(lambda_T_G, lambda_T_G)),
+        friction_power=0.0 * sb if slip is None else dot(lambda_T_G, slip[0]),
         energies={"E_kin": 0.5 * m * dot(v_S, v_S) + 0.5 * dot(omega, L_B), "E_pot": m * g * z_S},
         z_S=z_S,
         g_N1=0.0 * sb,  # r sin(beta) - r sin(beta): closed by construction
