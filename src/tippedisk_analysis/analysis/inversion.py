@@ -1,0 +1,277 @@
+"""Whether a start inverts, and the initial spin above which it does (docs/inversion.md).
+
+Criterion: a start *inverts* when the height of S, z_S, exceeds r + 0.8 e (INVERSION_HEIGHT) within the
+horizon, 150 s at eps = 0.1 m/s and growing like 1/eps below it (:func:`horizon`: the drift that inverts the
+disk is O(eps)). Starts: Table 3's (upright, gamma0, beta_dot = 0, no spin about the disk normal, no slip)
+with the initial spin alpha_dot given. A heyoka event finds the crossing, so a run's time is exact.
+
+Models (MODELS):
+* ``smooth``: ODE Model 1, symmetry-reduced (:mod:`tippedisk_analysis.models.reduced`: the contact exact);
+* ``slow``: its slow flow (:mod:`tippedisk_analysis.models.slow_flow`), rolling with the first-order slip.
+  It exists only inside the friction cone: a run that reaches the cone before S rises ends there (status
+  ``cone``) and counts as not inverting (chosen; the smooth model slides from there).
+
+Outcomes: ``inverted``; ``horizon``, ``fell`` (the tilt reached the fall angle) and ``cone`` do not invert;
+``lift_off`` (the bilateral contact stops being valid) and ``nonfinite`` decide nothing.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import functools
+import math
+from dataclasses import dataclass
+
+import heyoka as hy
+import numpy as np
+import xarray as xr
+
+from .. import kinematics as kin
+from ..dynamics import Event, System
+from ..errors import ParameterError
+from ..models import ode, reduced, slow_flow
+from ..parameters import InitialState, Setup
+from ..results import make_attrs
+
+__all__ = ["MODELS", "INVERSION_HEIGHT", "Outcome", "Threshold", "horizon", "system", "start_state", "parameters",
+           "outcome", "spin_threshold", "with_eps", "threshold_dataset"]
+
+MODELS = ("smooth", "slow")
+INVERSION_HEIGHT = 0.8  # z_S > r + 0.8 e: S well above G
+HORIZON = 150.0  # s, at eps = HORIZON_EPS
+HORIZON_EPS = 0.1  # m/s
+TOL = 1e-10  # Taylor tolerance of the runs
+NOT_INVERTING = ("horizon", "fell", "cone")
+UNDECIDED = ("lift_off", "nonfinite")
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """One run: ``status`` (module docstring), ``time`` [s] at which it ended (the inversion's time when
+    inverted), ``inverted`` (None when the run decides nothing)."""
+
+    spin: float
+    status: str
+    time: float
+
+    @property
+    def inverted(self) -> bool | None:
+        return None if self.status in UNDECIDED else self.status == "inverted"
+
+
+@dataclass(frozen=True)
+class Threshold:
+    """The initial spin above which a start inverts: ``spin`` [rad/s], the midpoint of ``low`` (a run that does
+    not invert) and ``high`` (one that does), both run; ``status`` completed (one crossing in the scan, bisected
+    to xtol, inverting above it), no_crossing, several_crossings (``crossings`` lists every bracket; also a single
+    crossing below which the start inverts) or undecided (a run decided nothing: see ``runs``); ``runs`` every
+    outcome, in the order run."""
+
+    spin: float
+    low: float
+    high: float
+    status: str
+    message: str
+    crossings: tuple
+    runs: tuple
+
+
+def horizon(eps: float) -> float:
+    """The criterion's horizon [s]: HORIZON at eps >= HORIZON_EPS, HORIZON * HORIZON_EPS / eps below."""
+    return HORIZON * max(1.0, HORIZON_EPS / float(eps))
+
+
+@functools.lru_cache(maxsize=None)
+def system(model: str) -> System:
+    """The model's System with the terminal event ``inverted`` (z_S rising through r + 0.8 e) added."""
+    _check_model(model)
+    base = reduced.system() if model == "smooth" else slow_flow.system()
+    z_S = base.observables["z_S"][0]
+    r, e = (hy.par[base.parameter_index(name)] for name in ("r", "e"))
+    return base.with_events(base.name + "_inversion", [Event("inverted", z_S - r - INVERSION_HEIGHT * e, "positive")])
+
+
+def _check_model(model: str) -> None:
+    if model not in MODELS:
+        raise ParameterError(f"unknown model {model!r} for the inversion criterion; choose one of {', '.join(MODELS)}")
+
+
+def start_state(model: str, spin: float, setup: Setup, gamma0: float) -> np.ndarray:
+    """Table 3's start with initial spin ``spin`` [rad/s] and gamma0 [rad], as a state of ``model``."""
+    _check_model(model)
+    initial = InitialState(alpha_dot=float(spin), gamma=float(gamma0))
+    rest = kin.rest_contact_state(setup.disk.r, initial.euler, initial.euler_rates)
+    angles = [initial.beta, initial.gamma]
+    if model == "smooth":
+        return np.array([*angles, rest["v_G"][0], rest["v_G"][1], *rest["omega"]])
+    return np.array([*angles, *rest["omega"]])
+
+
+def parameters(model: str, setup: Setup) -> np.ndarray:
+    """The model's runtime parameters for ``setup`` (eps from its friction)."""
+    _check_model(model)
+    values = dict(zip(ode.PARAMETER_NAMES, ode.parameter_vector(setup)))
+    return np.array([values[name] for name in system(model).parameter_names])
+
+
+def outcome(spin: float, *, model: str = "smooth", setup: Setup | None = None, gamma0: float | None = None,
+            horizon_s: float | None = None) -> Outcome:
+    """Run ``model`` from Table 3's start at initial spin ``spin`` [rad/s] until it inverts, ends or reaches
+    the horizon (default :func:`horizon` of the setup's eps)."""
+    setup = Setup() if setup is None else setup
+    gamma0 = InitialState().gamma if gamma0 is None else gamma0
+    model_system = system(model)
+    t_end = horizon(setup.friction.eps) if horizon_s is None else float(horizon_s)
+    if not t_end > 0:
+        raise ParameterError(f"horizon = {t_end} s must be positive")
+    ta = copy.deepcopy(model_system.taylor(TOL, events=True))
+    ta.time = 0.0
+    ta.state[:] = start_state(model, spin, setup, gamma0)
+    ta.pars[:] = parameters(model, setup)[: len(ta.pars)]
+    result = ta.propagate_until(t_end)[0]
+    if not (np.all(np.isfinite(ta.state)) and math.isfinite(ta.time)):
+        return Outcome(float(spin), "nonfinite", float(ta.time))
+    if result == hy.taylor_outcome.time_limit:
+        return Outcome(float(spin), "horizon", float(ta.time))
+    index = -int(result) - 1
+    if not 0 <= index < len(model_system.events):
+        return Outcome(float(spin), "nonfinite", float(ta.time))
+    return Outcome(float(spin), model_system.events[index].name, float(ta.time))
+
+
+def spin_threshold(*, model: str = "smooth", setup: Setup | None = None, gamma0: float | None = None,
+                   bracket: tuple = (20.0, 50.0), scan: int = 13, xtol: float = 1e-3,
+                   horizon_s: float | None = None) -> Threshold:
+    """The initial spin above which Table 3's start inverts (module docstring), for ``model``: ``scan`` spins
+    across ``bracket`` [rad/s] find where the outcome changes, each change is bisected to ``xtol``."""
+    _check_model(model)
+    low, high = map(float, bracket)
+    if not (math.isfinite(low) and math.isfinite(high) and 0 < low < high):
+        raise ParameterError(f"bracket = {bracket!r}: give two spins 0 < low < high in rad/s")
+    if int(scan) < 2 or not xtol > 0:
+        raise ParameterError(f"scan = {scan} and xtol = {xtol}: give scan >= 2 spins and xtol > 0 rad/s")
+    runs = []
+
+    def decide(spin):
+        runs.append(outcome(spin, model=model, setup=setup, gamma0=gamma0, horizon_s=horizon_s))
+        return runs[-1].inverted
+
+    spins = np.linspace(low, high, int(scan))
+    decided = [(s, d) for s, d in zip(spins, map(decide, spins)) if d is not None]
+    bad = [r for r in runs if r.inverted is None]
+    note = (f"; {len(bad)} scanned run(s) decided nothing (first: {bad[0].spin:.6g} rad/s ended {bad[0].status} at "
+            f"t = {bad[0].time:.6g} s)" if bad else "")
+    if len(decided) < 2:
+        return _threshold(math.nan, math.nan, math.nan, "undecided", "fewer than two scanned runs decided" + note,
+                          (), runs)
+    pairs = [(a, b, da) for (a, da), (b, db) in zip(decided, decided[1:]) if da != db]
+    if not pairs:
+        what = "inverts" if decided[0][1] else "does not invert"
+        return _threshold(math.nan, math.nan, math.nan, "no_crossing", f"every decided spin in [{low:g}, {high:g}] "
+                          f"rad/s {what}; widen the bracket" + note, (), runs)
+    crossings = []
+    for a, b, below in pairs:
+        while b - a > xtol:
+            mid = 0.5 * (a + b)
+            decision = decide(mid)
+            if decision is None:
+                return _threshold(math.nan, math.nan, math.nan, "undecided", f"the run at {mid:.6g} rad/s, between "
+                                  f"{a:.6g} and {b:.6g}, ended {runs[-1].status}" + note, tuple(crossings), runs)
+            a, b = (mid, b) if decision == below else (a, mid)
+        crossings.append((a, b))
+    (a, b) = crossings[0]
+    spin = 0.5 * (a + b)
+    if len(crossings) == 1 and not pairs[0][2]:
+        return _threshold(spin, a, b, "completed", f"inverts above {spin:.6g} rad/s, not below ({len(runs)} runs)"
+                          + note, tuple(crossings), runs)
+    where = ", ".join(f"{0.5 * (x + y):.6g}" for x, y in crossings)
+    return _threshold(spin, a, b, "several_crossings", f"the outcome changes at {where} rad/s (inverts at "
+                      f"{decided[0][0]:g} rad/s: {decided[0][1]}); no single threshold" + note, tuple(crossings), runs)
+
+
+def _threshold(spin, low, high, status, message, crossings, runs) -> Threshold:
+    return Threshold(float(spin), float(low), float(high), status, message, tuple(crossings), tuple(runs))
+
+
+def with_eps(setup: Setup | None, eps: float) -> Setup:
+    """``setup`` (default Tables 1-3) with the friction smoothing eps [m/s]."""
+    setup = Setup() if setup is None else setup
+    return dataclasses.replace(setup, friction=dataclasses.replace(setup.friction, eps=float(eps)))
+
+
+STATUS_FLAGS = {"completed": 0, "several_crossings": 1, "no_crossing": 2, "undecided": 3}
+RUN_FLAGS = {"padding": -1, "inverted": 0, "horizon": 1, "fell": 2, "cone": 3, "lift_off": 4, "nonfinite": 5}
+PADDING = -1.0
+FOUND = ("completed", "several_crossings")  # statuses with a located crossing
+
+
+def threshold_dataset(cases: dict) -> xr.Dataset:
+    """The thresholds of ``cases`` {label: (model, setup, Threshold)} as one dataset (kind
+    ``inversion_threshold``, dim ``case``; every run of each along ``run``, padded)."""
+    labels = list(cases)
+    n_runs = max(len(th.runs) for _m, _s, th in cases.values())
+
+    def column(get):
+        return np.array([get(*cases[k]) for k in labels], dtype=float)
+
+    def padded(get, fill):
+        table = np.full((len(labels), n_runs), fill)
+        for i, k in enumerate(labels):
+            values = [get(r) for r in cases[k][2].runs]
+            table[i, :len(values)] = values
+        return table
+
+    def found(th, value):
+        return value if th.status in FOUND else PADDING
+
+    def at_high(th):
+        return next((r.time for r in th.runs if r.spin == th.high), PADDING) if th.status in FOUND else PADDING
+
+    spin_attrs = {"units": "rad s-1", "padding_value": PADDING, "comment": "-1: no threshold (status)"}
+    ds = xr.Dataset(
+        {"spin_threshold": ("case", column(lambda m, s, th: found(th, th.spin)),
+                            {**spin_attrs, "long_name": "initial spin above which the start inverts (first crossing)"}),
+         "spin_low": ("case", column(lambda m, s, th: found(th, th.low)),
+                      {**spin_attrs, "long_name": "highest spin run that does not invert"}),
+         "spin_high": ("case", column(lambda m, s, th: found(th, th.high)),
+                       {**spin_attrs, "long_name": "lowest spin run that inverts"}),
+         "second_crossing": ("case", column(lambda m, s, th: 0.5 * sum(th.crossings[1]) if len(th.crossings) > 1
+                                            else PADDING),
+                             {**spin_attrs, "long_name": "the next spin at which the outcome changes"}),
+         "inversion_time": ("case", column(lambda m, s, th: at_high(th)),
+                            {"units": "s", "padding_value": PADDING, "long_name": "time the run at spin_high takes to "
+                             "lift S to r + 0.8 e"}),
+         "eps": ("case", column(lambda m, s, th: s.friction.eps),
+                 {"units": "m s-1", "long_name": "friction smoothing"}),
+         "e": ("case", column(lambda m, s, th: s.disk.e), {"units": "m", "long_name": "eccentricity of S"}),
+         "r": ("case", column(lambda m, s, th: s.disk.r), {"units": "m", "long_name": "disk radius"}),
+         "m": ("case", column(lambda m, s, th: s.disk.m), {"units": "kg", "long_name": "disk mass"}),
+         "A": ("case", column(lambda m, s, th: s.disk.A), {"units": "kg m2", "long_name": "inertia A about G"}),
+         "B": ("case", column(lambda m, s, th: s.disk.B), {"units": "kg m2", "long_name": "inertia B about G"}),
+         "C": ("case", column(lambda m, s, th: s.disk.C), {"units": "kg m2", "long_name": "inertia C about G"}),
+         "model": ("case", np.array([MODELS.index(cases[k][0]) for k in labels], dtype=np.int8),
+                   {"long_name": "model run", "flag_values": np.arange(len(MODELS), dtype=np.int8),
+                    "flag_meanings": " ".join(MODELS)}),
+         "threshold_status": ("case", np.array([STATUS_FLAGS[cases[k][2].status] for k in labels], dtype=np.int8),
+                              {"long_name": "outcome of the threshold search",
+                               "flag_values": np.array(list(STATUS_FLAGS.values()), dtype=np.int8),
+                               "flag_meanings": " ".join(STATUS_FLAGS)}),
+         "run_spin": (("case", "run"), padded(lambda r: r.spin, PADDING),
+                      {**spin_attrs, "long_name": "initial spin of each run", "comment": "-1: padding"}),
+         "run_time": (("case", "run"), padded(lambda r: r.time, PADDING),
+                      {"units": "s", "padding_value": PADDING, "long_name": "time at which each run ended"}),
+         "run_outcome": (("case", "run"), padded(lambda r: RUN_FLAGS[r.status], RUN_FLAGS["padding"]).astype(np.int8),
+                         {"long_name": "how each run ended", "flag_values": np.array(list(RUN_FLAGS.values()),
+                                                                                     dtype=np.int8),
+                          "flag_meanings": " ".join(RUN_FLAGS)})},
+        coords={"case": ("case", np.array(labels, dtype=object), {"long_name": "case label"})})
+    statuses = {cases[k][2].status for k in labels}
+    status = "completed" if statuses <= set(FOUND) else "partial"
+    config = {"criterion": f"z_S > r + {INVERSION_HEIGHT:g} e within {HORIZON:g} s at eps >= {HORIZON_EPS:g} m/s, "
+                           f"{HORIZON:g} * {HORIZON_EPS:g} / eps s below", "tol": TOL,
+              "cases": {k: {"model": cases[k][0], "message": cases[k][2].message} for k in labels}}
+    ds.attrs = make_attrs("inversion_threshold", config, status,
+                          f"{len(labels)} thresholds of the initial spin ({', '.join(sorted(statuses))})",
+                          title="Initial spin above which the Table 3 start inverts")
+    return ds
