@@ -126,6 +126,31 @@ from tippedisk_analysis.analysis import rolling
 # the rolling disk's spin: its eigenvalues
 print(rolling.spin_eigenvalues("inverted", [40.0])[0])
 ''',
+    "tippedisk_analysis.analysis.inversion": '''
+from tippedisk_analysis.analysis import inversion
+
+# one run: does the Table 3 start invert at 36 rad/s (z_S > r + 0.8 e)?
+print(inversion.outcome(36.0))
+# the initial spin above which it does, bracketed by two runs 0.01 rad/s apart
+th = inversion.spin_threshold(bracket=(30.0, 36.0), scan=4, xtol=0.01)
+print(th.status, th.low, th.high)
+# the same with the slow flow (rolling + first-order slip), eps = 5 mm/s
+slow = inversion.with_eps(None, 0.005)
+print(inversion.spin_threshold(model="slow", setup=slow, bracket=(32.0, 36.0), scan=3, xtol=0.01).message)
+''',
+    "tippedisk_analysis.analysis.critical_spin": '''
+from tippedisk_analysis.analysis import critical_spin as cs
+from tippedisk_analysis.parameters import Disk
+
+found = cs.omega_critical()  # Tables 1-2: the nutation of the inverted spin is damped above omega_c
+print(found.message)
+# the initial spin Table 3's start needs to reach that spin (a lower bound: friction's losses neglected)
+print(cs.initial_spin_threshold(found.omega_critical))
+# the answer checks itself: Re lambda / eps of the slow flow's nutation at omega_c (heyoka's Jacobian)
+print(cs.check_against_jacobian(found.omega_critical))
+# another disk: 4 mm eccentricity, A, B, C about G kept
+print(cs.omega_critical(Disk().with_eccentricity(0.004)).omega_critical)
+''',
     "tippedisk_analysis.plotting": '''
 import tippedisk_analysis as td
 from tippedisk_analysis.plotting import plot_dataset

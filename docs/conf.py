@@ -52,6 +52,8 @@ API_MODULES = (
     ("tippedisk_analysis.analysis.basins", "Basins and basin fractions"),
     ("tippedisk_analysis.analysis.bifurcation", "Bifurcation diagrams"),
     ("tippedisk_analysis.analysis.rolling", "The rolling disk"),
+    ("tippedisk_analysis.analysis.inversion", "Whether a start inverts: the threshold of the initial spin"),
+    ("tippedisk_analysis.analysis.critical_spin", "The critical spin in closed form"),
     ("tippedisk_analysis.plotting", "Figures and animations"),
     ("tippedisk_analysis.solvers.moreau", "Moreau time stepping"),
 )

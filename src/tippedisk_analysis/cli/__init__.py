@@ -21,8 +21,8 @@ import warnings
 
 from ..errors import TippediskError, TippediskWarning
 from ..version import __version__
-from . import (animate, basins, bifurcation, continuation, lyapunov, outcome_map, periodic_orbits, plot,  # noqa: F401
-               poincare, simulate, stability_map, study)  # registration
+from . import (animate, basins, bifurcation, continuation, critical_spin, lyapunov, outcome_map,  # noqa: F401
+               periodic_orbits, plot, poincare, simulate, stability_map, study)  # registration
 from .registry import COMMANDS
 
 EXIT_INTERRUPTED = 130  # 128 + SIGINT, as shells report it

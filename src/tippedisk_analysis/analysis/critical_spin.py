@@ -1,0 +1,288 @@
+"""The critical spin in closed form: the spin above which friction damps the nutation of the inverted disk.
+
+Linearise the slow flow (:mod:`tippedisk_analysis.models.slow_flow`, (S1)-(S3)) at the inverted spin
+(beta = pi/2, gamma = pi/2, omega = (Omega, 0, 0): upright, S straight above G). omega_x is the family of
+spins (a zero eigenvalue); on (beta, gamma, omega_y, omega_z) the Jacobian is exactly K0 + eps K1
+(:func:`spin_matrices`: K0 the rolling disk's, K1 the first-order slip's, proportional to 1/mu). Its
+characteristic polynomial, to first order in eps, is
+
+    lambda^4 + eps a3 lambda^3 + c2 lambda^2 + eps a1 lambda + c0,                                (C1)
+
+with the rolling coefficients c2, c0 and the friction coefficients a3, a1 (:func:`coefficients`). Rolling
+(eps = 0) has the pairs +-i nu_1, +-i nu_2 with
+
+    nu^2 = (c2 -+ sqrt(c2^2 - 4 c0)) / 2                                                          (C2)
+
+where c2^2 > 4 c0 (above the spin where the two pairs collide). Friction gives each pair the real part
+
+    Re lambda = -eps (a1 - a3 nu^2) / (2 (c2 - 2 nu^2)) + O(eps^2).                                (C3)
+
+The critical spin omega_c is where the nutation (the slower pair, nu_1) turns from growing to damped:
+
+    a1 = a3 nu_1^2,   equivalently   a1^2 - c2 a1 a3 + c0 a3^2 = 0 (a cubic in Omega^2).              (C4)
+
+a1 and a3 are both proportional to 1/mu and (C4) is homogeneous in them: omega_c depends on m, e, r, A, B, C
+and g only, not on mu or eps. The other pair (the precession, nu_2) grows above omega_c: the inverted spin
+itself is never asymptotically stable; the disk ends on a torus around it (docs/rolling.md).
+
+From omega_c, the initial spin a start needs (C5, :func:`initial_spin_threshold`): the disk reaches the
+inverted spin only with an energy E_spin(omega_c) = A omega_c^2 / 2 + m g (r + e) (rolling energy of
+:mod:`tippedisk_analysis.models.rolling`), so the start's rolling energy must be at least that. Friction
+dissipates on the way (power O(eps) for a time O(1/eps): an amount independent of eps), so this is a lower
+bound on the full model's threshold; how close it is is measured in docs/inversion.md.
+
+:func:`derive` repeats the derivation in sympy from the package's own expressions
+(``slow_flow.slow_dynamics``); tests check that it gives :func:`spin_matrices` exactly.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import xarray as xr
+from scipy.optimize import brentq
+
+from ..errors import ParameterError
+from ..models import rolling, slow_flow
+from ..parameters import Disk, InitialState, Setup
+from ..results import make_attrs
+from . import inversion
+from .rolling import spin_state
+
+__all__ = ["spin_matrices", "characteristic", "coefficients", "rates", "first_order_pairs", "CriticalSpin",
+           "omega_critical", "initial_spin_threshold", "prediction_map",
+           "derive", "check_against_jacobian"]
+
+SCAN = (1.0, 400.0, 800)  # rad/s: omega_c is looked for on this grid of Omega (first growing -> damped change)
+
+
+def spin_matrices(Omega, m, e, r, A, B, C, g, mu):
+    """(K0, K1): the rolling and the first-order slip Jacobian (4 x 4 nested lists, rows and columns beta,
+    gamma, omega_y, omega_z) of the slow flow at the inverted spin Omega [rad/s]; the slow flow's Jacobian is
+    K0 + eps K1 exactly. Arithmetic only: numbers give numbers, sympy symbols give the closed form.
+    B_C, C_C: the inertia about the tangent and the normal axis through the contact point; d = r + e, the
+    height of S above it."""
+    d = r + e
+    B_C, C_C = B + m * r * (r + 2 * e), C + m * r * (r + 2 * e)
+    K0 = [[0, -Omega, -1, 0],
+          [Omega, 0, 0, 1],
+          [-m * d * (Omega**2 * r + g) / B_C, 0, 0, Omega * (C_C - A - m * r * d) / B_C],
+          [0, -m * (Omega**2 * r * d - e * g) / C_C, Omega * (A - B_C) / C_C, 0]]
+    row2 = B_C**2 * C_C * g * mu
+    row3 = B_C * C_C**2 * g * mu
+    k21 = (Omega**3 * d * m * r * (A * d**2 * m - 2 * B_C * C_C + 2 * B_C * d**2 * m - B_C * d * m * r
+                                   + d**3 * m**2 * r)
+           + Omega * d * g * m**2 * (-A * d**2 + A * d * r - 2 * B_C * d**2 + 3 * B_C * d * r - B_C * r**2
+                                     + 2 * C_C * d**2 - C_C * d * r - d**3 * m * r + d**2 * m * r**2)) / row2
+    k22 = (C_C * d**3 * g * m**2
+           - Omega**2 * d * m * (A**2 * d + A * B_C * d - A * B_C * r - A * C_C * d + A * d**2 * m * r - 2 * B_C**2 * d
+                                 + B_C**2 * r + 2 * B_C * C_C * d + B_C * C_C * r - B_C * d**2 * m * r
+                                 - C_C * d**2 * m * r)) / row2
+    k30 = (-Omega**3 * d * m * r * (A * d**2 * m - 2 * B_C * C_C + 2 * C_C * d**2 * m)
+           - Omega * d**2 * g * m**2 * (A * d - 2 * B_C * d + B_C * r + 2 * C_C * d)) / row3
+    k33 = (B_C * d**2 * g * m**2 * e
+           - Omega**2 * d * m * (A**2 * d - A * B_C * d + A * C_C * d + A * d**2 * m * r + 2 * B_C * C_C * d
+                                 - 2 * B_C * C_C * r - 2 * C_C**2 * d + 2 * C_C * d**2 * m * r)) / row3
+    K1 = [[0, 0, 0, 0], [0, 0, 0, 0], [0, k21, k22, 0], [k30, 0, 0, k33]]
+    return K0, K1
+
+
+def characteristic(K0, K1):
+    """(c2, c0, a3, a1) of (C1): the characteristic polynomial of K0 + eps K1 to first order in eps, for 4 x 4
+    matrices with the sparsity of :func:`spin_matrices` (K0: entries 01 02 10 13 20 23 31 32; K1: 21 22 30 33)."""
+    (_, a01, a02, _), (a10, _, _, a13), (a20, _, _, a23), (_, a31, a32, _) = K0
+    (_, b21, b22, _), (b30, _, _, b33) = K1[2:]
+    c2 = -a01 * a10 - a02 * a20 - a13 * a31 - a23 * a32
+    c0 = a01 * a10 * a23 * a32 - a01 * a13 * a20 * a32 - a02 * a10 * a23 * a31 + a02 * a13 * a20 * a31
+    a3 = -(b22 + b33)
+    a1 = (a01 * a10 * (b22 + b33) - a01 * a13 * b30 - a02 * a10 * b21 + a02 * a20 * b33 - a02 * a23 * b30
+          + a13 * a31 * b22 - a13 * a32 * b21)
+    return c2, c0, a3, a1
+
+
+def coefficients(Omega, m, e, r, A, B, C, g, mu):
+    """(c2, c0, a3, a1) of (C1) at the inverted spin Omega [rad/s]."""
+    return characteristic(*spin_matrices(Omega, m, e, r, A, B, C, g, mu))
+
+
+def _values(disk: Disk, gravity: float, mu: float) -> dict:
+    return dict(m=disk.m, e=disk.e, r=disk.r, A=disk.A, B=disk.B, C=disk.C, g=gravity, mu=mu)
+
+
+def rates(Omega: float, disk: Disk | None = None, gravity: float = 9.81, mu: float = 0.3) -> dict:
+    """The rolling frequencies nu [rad/s] (C2) and the first-order real parts per eps [1/m] (C3) of the
+    nutation (slower pair) and the precession (faster pair) at the inverted spin; NaN where the rolling spin is
+    not elliptic (c2^2 < 4 c0: below the collision of the pairs; or c0, c2 < 0: real eigenvalues)."""
+    disk = Disk() if disk is None else disk
+    c2, c0, a3, a1 = coefficients(float(Omega), **_values(disk, gravity, mu))
+    disc = c2 * c2 - 4 * c0
+    if disc < 0 or c0 < 0 or c2 < 0:  # not four imaginary eigenvalues
+        nan = float("nan")
+        return {"nu_nutation": nan, "nu_precession": nan, "rate_nutation": nan, "rate_precession": nan}
+    (nu_1, rate_1), (nu_2, rate_2) = first_order_pairs(c2, c0, a3, a1)
+    return {"nu_nutation": nu_1, "nu_precession": nu_2, "rate_nutation": rate_1, "rate_precession": rate_2}
+
+
+def first_order_pairs(c2, c0, a3, a1) -> tuple:
+    """((nu_1, rate_1), (nu_2, rate_2)) of (C1) with c2, c0 > 0 and c2^2 > 4 c0: the frequencies (C2), slower
+    first, and Re lambda / eps of each pair (C3)."""
+    root = math.sqrt(c2 * c2 - 4 * c0)
+    return tuple((math.sqrt(n2), -(a1 - a3 * n2) / (2 * (c2 - 2 * n2))) for n2 in ((c2 - root) / 2, (c2 + root) / 2))
+
+
+@dataclass(frozen=True)
+class CriticalSpin:
+    """omega_c [rad/s] (C4) of a disk, with the precession's rate there (C3, per eps) and ``status``:
+    completed; no_crossing (the nutation does not turn from growing to damped on SCAN) or not_elliptic (the
+    rolling inverted spin is a saddle at every Omega on SCAN), both with omega_c NaN."""
+
+    omega_critical: float
+    nu_nutation: float  # rad/s, the nutation frequency at omega_c
+    rate_precession: float  # 1/m: Re lambda / eps of the precession at omega_c (> 0: it grows)
+    status: str
+    message: str
+
+
+def omega_critical(disk: Disk | None = None, gravity: float = 9.81, mu: float = 0.3) -> CriticalSpin:
+    """The critical spin omega_c (C4): the first Omega on SCAN where the nutation of the inverted spin turns
+    from growing to damped, refined by Brent's method on (C3). Independent of mu and eps (module docstring);
+    mu only scales the rate reported."""
+    disk = Disk() if disk is None else disk
+    grid = np.linspace(*SCAN)
+
+    def rate(w):
+        return rates(w, disk, gravity, mu)["rate_nutation"]
+
+    values = np.array([rate(w) for w in grid])
+    change = np.flatnonzero((values[:-1] > 0) & (values[1:] < 0))
+    span = f"{SCAN[0]:g}-{SCAN[1]:g} rad/s"
+    if not np.isfinite(values).any():
+        return CriticalSpin(float("nan"), float("nan"), float("nan"), "not_elliptic",
+                            f"the rolling inverted spin has real eigenvalues at every Omega on {span} (no nutation "
+                            "to damp): the disk cannot settle near it")
+    if change.size == 0:
+        return CriticalSpin(float("nan"), float("nan"), float("nan"), "no_crossing",
+                            f"the nutation of the inverted spin does not turn from growing to damped on {span}")
+    w = brentq(rate, grid[change[0]], grid[change[0] + 1], xtol=1e-12, rtol=1e-14)
+    at = rates(w, disk, gravity, mu)
+    return CriticalSpin(float(w), at["nu_nutation"], at["rate_precession"], "completed",
+                        f"the nutation of the inverted spin is damped above {w:.4f} rad/s")
+
+
+def initial_spin_threshold(omega_c: float, setup: Setup | None = None, gamma0: float | None = None) -> float:
+    """(C5) the initial spin [rad/s] of Table 3's start (gamma0 [rad]) whose rolling energy equals that of the
+    inverted spin at omega_c: the least spin with which the disk can reach it (friction's losses neglected)."""
+    setup = Setup() if setup is None else setup
+    gamma0 = InitialState().gamma if gamma0 is None else gamma0
+    if not (math.isfinite(omega_c) and omega_c > 0):
+        raise ParameterError(f"omega_c = {omega_c} rad/s: give a positive finite critical spin")
+    system = rolling.reduced_system()
+    pars = rolling.parameter_vector(setup)
+
+    def energy(state):
+        return float(system.observe(state, pars)["E_tot"])
+
+    e_spin = energy(spin_state("inverted", omega_c))
+    e_rest = energy(inversion.start_state("slow", 0.0, setup, gamma0))
+    e_unit = energy(inversion.start_state("slow", 1.0, setup, gamma0)) - e_rest  # kinetic energy at 1 rad/s
+    # e_spin > e_rest: the start is upright (z_S <= r + e) and the spin has kinetic energy
+    return math.sqrt((e_spin - e_rest) / e_unit)
+
+
+@functools.lru_cache(maxsize=None)
+def derive():
+    """(symbols, K0, K1, K2) in sympy, derived from ``slow_flow.slow_dynamics`` (the package's slow flow) at the
+    inverted spin: the state perturbed along each coordinate by t, differentiated in t at t = 0; K1 the
+    derivative in eps, K0 the value at eps = 0, K2 the second derivative in eps (zero: the Jacobian is linear
+    in eps). About 10 s."""
+    import sympy as sp
+
+    from ..models.ode import Trig
+
+    names = ("m", "e", "r", "A", "B", "C", "gravity", "mu", "eps")
+    symbols = {n: sp.Symbol("g" if n == "gravity" else n, positive=True) for n in names}
+    symbols["Omega"] = sp.Symbol("Omega", positive=True)
+    x = sp.symbols("beta gamma omega_x omega_y omega_z", real=True)
+    trig = Trig(0, 1, sp.sin(x[0]), sp.cos(x[0]), sp.sin(x[1]), sp.cos(x[1]))
+    delta = sp.Symbol("delta", positive=True)  # the force smoothing: drops out at the spin (lambda_T = 0)
+    flow = slow_flow.slow_dynamics(list(x), trig, pars=symbols, sqrt=sp.sqrt, diff=sp.diff, smoothing=delta)
+    spin = (sp.pi / 2, sp.pi / 2, symbols["Omega"], 0, 0)
+    t = sp.Symbol("t")
+    keep = (0, 1, 3, 4)  # beta, gamma, omega_y, omega_z (omega_x: the family of spins)
+    J = sp.zeros(4, 4)
+    for col, j in enumerate(keep):
+        at = {x[k]: spin[k] + (t if k == j else 0) for k in range(5)}
+        for row, i in enumerate(keep):
+            J[row, col] = sp.diff(flow.rhs[i].subs(at), t).subs(t, 0)
+    eps = symbols["eps"]
+    K0 = J.subs(eps, 0).applyfunc(sp.simplify)
+    K1 = J.diff(eps).subs(eps, 0).applyfunc(sp.simplify)
+    return symbols, K0, K1, J.diff(eps, 2).applyfunc(sp.simplify)
+
+
+def check_against_jacobian(omega_c: float, setup: Setup | None = None, eps: float = 1e-4) -> float:
+    """Re lambda / eps [1/m] of the nutation pair of the slow flow's numerical Jacobian (heyoka) at the inverted
+    spin omega_c: zero to O(eps) when (C4) is right (the answer checks itself)."""
+    setup = inversion.with_eps(setup, eps)
+    system = slow_flow.system()
+    ev = np.linalg.eigvals(system.jacobian(spin_state("inverted", omega_c), inversion.parameters("slow", setup)))
+    oscillating = ev[np.abs(ev.imag) > 1e-9 * max(1.0, omega_c)]
+    nutation = oscillating[np.argmin(np.abs(oscillating.imag))]
+    return float(nutation.real / eps)
+
+
+MAP_FLAGS = {"completed": 0, "no_crossing": 1, "not_elliptic": 2, "no_disk": 3}
+PADDING = -1.0
+
+
+def prediction_map(e_values, r_values, *, base: Disk | None = None, gravity: float = 9.81,
+                   gamma0: float | None = None) -> xr.Dataset:
+    """omega_c (C4) and the initial spin threshold (C5) over eccentricity e [m] x radius r [m] (kind
+    ``critical_spin_map``). ``base`` (default: the drilled disk of Sect. 5) gives the rest: a geometry moves its
+    hole for each e (m, A, B, C recomputed; a point whose hole would leave the disk is ``no_disk``), a disk
+    given by values keeps m and A, B, C about G. Points without a value hold -1 and say why in ``status``."""
+    base = Disk.from_geometry() if base is None else base
+    e_values, r_values = np.asarray(e_values, dtype=float), np.asarray(r_values, dtype=float)
+    shape = (e_values.size, r_values.size)
+    omega_c, threshold = np.full(shape, PADDING), np.full(shape, PADDING)
+    status = np.full(shape, MAP_FLAGS["no_disk"], dtype=np.int8)
+    for j, r in enumerate(r_values):
+        for i, e in enumerate(e_values):
+            try:
+                if base.geometry is not None:
+                    disk = Disk.from_geometry(base.geometry.rho, r, base.geometry.a, base.geometry.b,
+                                              base.geometry.h).with_eccentricity(e)
+                else:
+                    disk = dataclasses.replace(base, r=float(r), e=float(e))
+            except ParameterError:
+                continue
+            found = omega_critical(disk, gravity)
+            status[i, j] = MAP_FLAGS[found.status]
+            if found.status == "completed":
+                omega_c[i, j] = found.omega_critical
+                threshold[i, j] = initial_spin_threshold(found.omega_critical, Setup(disk=disk, gravity=gravity),
+                                                         gamma0)
+    attrs = {"units": "rad s-1", "padding_value": PADDING, "comment": "-1: no value (status)"}
+    ds = xr.Dataset(
+        {"omega_critical": (("e", "r"), omega_c, {**attrs, "long_name": "critical spin (C4): the inverted spin's "
+                                                   "nutation is damped above it"}),
+         "initial_spin_threshold": (("e", "r"), threshold,
+                                    {**attrs, "long_name": "initial spin of Table 3's start with the rolling energy "
+                                                           "of the inverted spin at omega_c (C5)"}),
+         "status": (("e", "r"), status, {"long_name": "what each point gave",
+                                         "flag_values": np.array(list(MAP_FLAGS.values()), dtype=np.int8),
+                                         "flag_meanings": " ".join(MAP_FLAGS)})},
+        coords={"e": ("e", e_values, {"units": "m", "long_name": "eccentricity of S"}),
+                "r": ("r", r_values, {"units": "m", "long_name": "disk radius"})})
+    n_done = int((status == MAP_FLAGS["completed"]).sum())
+    config = {"e": e_values.tolist(), "r": r_values.tolist(), "gravity": gravity,
+              "gamma0": InitialState().gamma if gamma0 is None else gamma0,
+              "base": "drilled geometry" if base.geometry is not None else dataclasses.asdict(base)}
+    ds.attrs = make_attrs("critical_spin_map", config, "completed",
+                          f"omega_c at {n_done} of {status.size} (e, r) points; the others: see status",
+                          title="Critical spin of the tippedisk in closed form over eccentricity and radius")
+    return ds

@@ -1,0 +1,79 @@
+"""``tippedisk critical-spin``: the critical spin in closed form and the initial spin it predicts
+(docs/inversion.md)."""
+
+from __future__ import annotations
+
+import json
+import math
+
+from .common import add_disk, disk_from_args, finite_float
+from .registry import command
+
+
+def _arguments(p) -> None:
+    p.add_argument("--gamma0", type=finite_float,
+                   help="gamma(0) of the Table 3 start [rad] (default -pi/2 + 0.1: S 0.1 rad from below G)")
+    p.add_argument("--mu", type=finite_float, help="friction coefficient [-] (0.3; omega_c does not depend on it)")
+    p.add_argument("--eps", type=finite_float,
+                   help="smoothing of (2.29) [m/s] (0.1; the prediction does not depend on it; with --simulate: "
+                        "the full model's eps, horizon 150 s x max(1, 0.1/eps))")
+    p.add_argument("--simulate", action="store_true",
+                   help="also find the full model's threshold by bisection (ODE Model 1, about a minute at eps 0.1)")
+    p.add_argument("--json", action="store_true",
+                   help='print one JSON object: {"omega_critical": ..., "initial_spin_threshold": ..., ...} in rad/s')
+    add_disk(p)
+
+
+@command("critical-spin", "the critical spin omega_c in closed form and the initial spin a start needs to invert",
+         _arguments)
+def critical_spin(args) -> int:
+    import dataclasses
+
+    from ..analysis import critical_spin as cs
+    from ..analysis import inversion
+    from ..parameters import Friction, InitialState, Setup
+
+    friction = {k: v for k, v in (("mu", args.mu), ("eps", args.eps)) if v is not None}
+    setup = Setup(disk=disk_from_args(args), friction=dataclasses.replace(Friction(), **friction))
+    gamma0 = InitialState().gamma if args.gamma0 is None else args.gamma0
+    found = cs.omega_critical(setup.disk, setup.gravity, setup.friction.mu)
+    out = {"omega_critical": None, "initial_spin_threshold": None, "status": found.status, "message": found.message,
+           "gamma0": gamma0}
+    if found.status == "completed":
+        out["omega_critical"] = found.omega_critical
+        out["initial_spin_threshold"] = cs.initial_spin_threshold(found.omega_critical, setup, gamma0)
+        out["nutation_frequency"] = found.nu_nutation
+        out["check_nutation_rate_per_eps"] = cs.check_against_jacobian(found.omega_critical, setup)
+    if args.simulate:
+        low = 0.8 * out["initial_spin_threshold"] if out["initial_spin_threshold"] else 15.0
+        th = inversion.spin_threshold(setup=setup, gamma0=gamma0, bracket=(low, 2.0 * low), scan=11, xtol=1e-3)
+        out["full_model_threshold"] = th.spin if th.status == "completed" else None
+        out["full_model_status"] = th.status
+        out["full_model_message"] = th.message
+    if args.json:
+        print(json.dumps(out))
+    else:
+        print(_text(out))
+    failed = found.status != "completed" or (args.simulate and out["full_model_status"] != "completed")
+    return 1 if failed else 0
+
+
+def _text(out: dict) -> str:
+    if out["omega_critical"] is None:
+        return f"no critical spin: {out['message']}"
+    lines = [f"omega_c = {out['omega_critical']:.4f} rad/s: {out['message']} (formula (C4), independent of mu "
+             "and eps)",
+             f"initial spin threshold >= {out['initial_spin_threshold']:.4f} rad/s for gamma0 = {out['gamma0']:.4f} "
+             "rad (C5: the start's rolling energy reaches the inverted spin's at omega_c; friction's losses on "
+             "the way neglected, so the full model needs more)",
+             f"check: the slow flow's Jacobian at omega_c (eps 1e-4) gives the nutation Re lambda / eps = "
+             f"{out['check_nutation_rate_per_eps']:.2e} 1/m (0 when the formula holds)"]
+    if "full_model_status" in out:
+        full = out["full_model_threshold"]
+        if full is not None and math.isfinite(full):
+            diff = full - out["initial_spin_threshold"]
+            lines.append(f"full model (ODE Model 1): inverts above {full:.4f} rad/s, {diff:+.4f} rad/s "
+                         f"({100 * diff / full:+.2f} %) above the prediction")
+        else:
+            lines.append(f"full model (ODE Model 1): {out['full_model_status']}: {out['full_model_message']}")
+    return "\n".join(lines)

@@ -1,0 +1,186 @@
+"""The critical spin in closed form (analysis/critical_spin.py, docs/inversion.md): the algebra on textbook
+cases, the closed form against the package's slow flow (sympy and heyoka), omega_c against the full smooth
+model's eigenvalues, the predicted initial spin against the full model's threshold, the command."""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import json
+import math
+
+import numpy as np
+import pytest
+
+from tippedisk_analysis.analysis import critical_spin as cs
+from tippedisk_analysis.analysis import inversion
+from tippedisk_analysis.analysis.rolling import spin_eigenvalues, spin_state
+from tippedisk_analysis.cli import main
+from tippedisk_analysis.models import reduced, slow_flow
+from tippedisk_analysis.parameters import Disk, InitialState, Setup
+
+OTHER_DISKS = {"table 2": Disk(), "drilled, e 1.5 mm": Disk.from_geometry().with_eccentricity(1.5e-3),
+               "drilled, r 40 mm": Disk.from_geometry(r=0.040), "table 2, e 10 mm": Disk().with_eccentricity(0.01)}
+
+
+def disk_args(disk: Disk, Omega, mu=0.3, g=9.81):
+    return dict(Omega=Omega, m=disk.m, e=disk.e, r=disk.r, A=disk.A, B=disk.B, C=disk.C, g=g, mu=mu)
+
+
+def test_characteristic_is_numpys_polynomial_to_first_order():
+    rng = np.random.default_rng(7)
+    eps = 1e-7
+    for _ in range(5):
+        K0, K1 = np.zeros((4, 4)), np.zeros((4, 4))
+        for i, j in ((0, 1), (0, 2), (1, 0), (1, 3), (2, 0), (2, 3), (3, 1), (3, 2)):
+            K0[i, j] = rng.normal()
+        for i, j in ((2, 1), (2, 2), (3, 0), (3, 3)):
+            K1[i, j] = rng.normal()
+        c2, c0, a3, a1 = cs.characteristic(K0.tolist(), K1.tolist())
+        np.testing.assert_allclose(np.poly(K0 + eps * K1), [1, eps * a3, c2, eps * a1, c0], atol=1e-12)
+
+
+def test_first_order_pairs_on_two_weakly_damped_oscillators():
+    """(lambda^2 + eps d1 lambda + w1^2)(lambda^2 + eps d2 lambda + w2^2): Re lambda = -eps d_k / 2 exactly."""
+    w1, w2, d1, d2 = 1.3, 4.1, 0.7, -2.5
+    c2, c0, a3, a1 = w1**2 + w2**2, w1**2 * w2**2, d1 + d2, d1 * w2**2 + d2 * w1**2
+    (nu1, r1), (nu2, r2) = cs.first_order_pairs(c2, c0, a3, a1)
+    assert (nu1, nu2) == pytest.approx((w1, w2), rel=1e-14)
+    assert (r1, r2) == pytest.approx((-d1 / 2, -d2 / 2), rel=1e-13)
+
+
+@pytest.mark.parametrize("name", list(OTHER_DISKS))
+def test_closed_form_is_heyokas_jacobian_of_the_slow_flow(name):
+    """K0 + eps K1 written out equals the slow flow's Jacobian (heyoka's derivatives) at the inverted spin."""
+    disk, system = OTHER_DISKS[name], slow_flow.system()
+    for Omega in (15.0, 33.0, 70.0):
+        for eps in (1e-3, 0.05):
+            pars = inversion.parameters("slow", inversion.with_eps(Setup(disk=disk), eps))
+            J = system.jacobian(spin_state("inverted", Omega), pars)[np.ix_((0, 1, 3, 4), (0, 1, 3, 4))]
+            K0, K1 = cs.spin_matrices(**disk_args(disk, Omega))
+            K = np.array(K0, dtype=float) + eps * np.array(K1, dtype=float)
+            np.testing.assert_allclose(J, K, rtol=1e-9, atol=1e-9 * np.abs(J).max())
+
+
+@pytest.mark.slow
+def test_closed_form_is_sympys_derivation_from_the_slow_flow():
+    import sympy as sp
+
+    S, K0, K1, K2 = cs.derive()
+    M0, M1 = cs.spin_matrices(S["Omega"], S["m"], S["e"], S["r"], S["A"], S["B"], S["C"], S["gravity"], S["mu"])
+    assert K2 == sp.zeros(4, 4)  # the Jacobian is linear in eps
+    for i in range(4):
+        for j in range(4):
+            assert sp.simplify(K0[i, j] - M0[i][j]) == 0, (i, j)
+            assert sp.simplify(K1[i, j] - M1[i][j]) == 0, (i, j)
+
+
+def test_rolling_frequencies_are_the_rolling_models():
+    for Omega in (20.0, 40.0):
+        c2, c0, a3, a1 = cs.coefficients(**disk_args(Disk(), Omega))
+        (nu1, _), (nu2, _) = cs.first_order_pairs(c2, c0, a3, a1)
+        ev = spin_eigenvalues("inverted", [Omega])[0]
+        assert sorted(np.abs(ev.imag[ev.imag > 1e-9])) == pytest.approx([nu1, nu2], rel=1e-10)
+
+
+def full_model_nutation_rate(Omega, eps, disk):
+    """Re lambda / eps of the nutation pair of ODE Model 1 (reduced, with the slip as states) at the spin."""
+    setup = inversion.with_eps(Setup(disk=disk), eps)
+    x = slow_flow.smooth_state(spin_state("inverted", Omega), inversion.parameters("slow", setup))
+    ev = np.linalg.eigvals(reduced.system().jacobian(x, inversion.parameters("smooth", setup)))
+    oscillating = ev[np.abs(ev.imag) > 1e-6]
+    return oscillating[np.argmin(np.abs(oscillating.imag))].real / eps
+
+
+@pytest.mark.parametrize("name", list(OTHER_DISKS))
+def test_critical_spin_is_where_the_full_models_nutation_turns(name):
+    """omega_c from (C4) is where the nutation of ODE Model 1's inverted spin turns, to O(eps^2)."""
+    from scipy.optimize import brentq
+
+    disk = OTHER_DISKS[name]
+    found = cs.omega_critical(disk)
+    assert found.status == "completed"
+    w = found.omega_critical
+    assert full_model_nutation_rate(w - 0.5, 1e-3, disk) > 0 > full_model_nutation_rate(w + 0.5, 1e-3, disk)
+    error = [abs(brentq(lambda x: full_model_nutation_rate(x, eps, disk), w - 1, w + 1, xtol=1e-12) - w)
+             for eps in (1e-2, 1e-3)]
+    assert error[1] < 1e-3
+    assert 50 < error[0] / error[1] < 200  # O(eps^2): eps / 10 -> error / 100
+    assert abs(cs.check_against_jacobian(w, Setup(disk=disk))) < 1e-5  # per eps [1/m]; slopes are O(1)
+
+
+def test_critical_spin_does_not_depend_on_mu():
+    assert cs.omega_critical(mu=0.1).omega_critical == pytest.approx(cs.omega_critical(mu=0.6).omega_critical,
+                                                                     rel=1e-12)
+    # ... while the rates scale with 1/mu
+    assert cs.rates(35.0, mu=0.1)["rate_nutation"] == pytest.approx(6 * cs.rates(35.0, mu=0.6)["rate_nutation"])
+
+
+def test_a_nearly_symmetric_disk_has_no_critical_spin_and_says_why():
+    found = cs.omega_critical(Disk().with_eccentricity(1e-4))
+    assert found.status == "not_elliptic" and math.isnan(found.omega_critical)
+    assert "real eigenvalues" in found.message
+
+
+def test_threshold_is_the_energy_of_the_inverted_spin():
+    """(C5): at the predicted initial spin the start's rolling energy equals the inverted spin's at omega_c,
+    E = A omega_c^2 / 2 + m g (r + e) (written out here, not from the code)."""
+    disk, g = Disk(), 9.81
+    w_c = cs.omega_critical(disk).omega_critical
+    w_0 = cs.initial_spin_threshold(w_c)
+    d0 = InitialState().gamma + 0.5 * math.pi  # S is d0 off straight below G; the spin axis is in the disk plane
+    start = 0.5 * (disk.A * math.cos(d0) ** 2 + disk.B * math.sin(d0) ** 2) * w_0**2 + disk.m * g * (
+        disk.r - disk.e * math.cos(d0))
+    assert start == pytest.approx(0.5 * disk.A * w_c**2 + disk.m * g * (disk.r + disk.e), rel=1e-12)
+
+
+@pytest.mark.slow
+def test_prediction_bounds_the_full_models_threshold_at_two_mu():
+    """ODE Model 1 from Table 3 at eps 0.1: the threshold lies above the prediction (friction dissipates on the
+    way up) by less than 3 %, whatever mu (omega_c does not depend on it); and the spin with which the disk
+    passes the criterion is omega_c within 3 % (the mechanism: it arrives where the nutation is damped)."""
+    predicted = cs.initial_spin_threshold(cs.omega_critical().omega_critical)
+    found, setups = [], []
+    for mu in (0.15, 0.5):
+        setup = dataclasses.replace(Setup(), friction=dataclasses.replace(Setup().friction, mu=mu))
+        th = inversion.spin_threshold(setup=setup, bracket=(32.0, 36.0), scan=5, xtol=0.01)
+        assert th.status == "completed"
+        assert predicted < th.spin < 1.03 * predicted
+        found.append(th.spin)
+        setups.append(setup)
+    assert abs(found[0] - found[1]) < 0.1
+    system = inversion.system("smooth")
+    ta = copy.deepcopy(system.taylor(inversion.TOL, events=True))
+    ta.time = 0.0
+    ta.state[:] = inversion.start_state("smooth", found[1] + 0.02, setups[1], InitialState().gamma)
+    pars = inversion.parameters("smooth", setups[1])
+    ta.pars[:] = pars[: len(ta.pars)]
+    ta.propagate_until(inversion.horizon(0.1))
+    assert system.observe(ta.state.copy(), pars)["z_S"] == pytest.approx(Disk().r + 0.8 * Disk().e, rel=1e-9)
+    spin = float(system.observe(ta.state.copy(), pars)["alpha_dot"])
+    assert spin == pytest.approx(cs.omega_critical().omega_critical, rel=0.03)
+
+
+def test_command_prints_both_and_json(capsys):
+    assert main(["critical-spin", "--json", "--e", "0.0035"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    disk = Disk().with_eccentricity(0.0035)
+    w_c = cs.omega_critical(disk).omega_critical
+    assert out["omega_critical"] == pytest.approx(w_c, rel=1e-12)
+    assert out["initial_spin_threshold"] == pytest.approx(cs.initial_spin_threshold(w_c, Setup(disk=disk)), rel=1e-12)
+    assert main(["critical-spin"]) == 0
+    text = capsys.readouterr().out
+    assert "omega_c = 30.23" in text and "initial spin threshold >= 32.95" in text
+
+
+@pytest.mark.parametrize("argv, status, words", [
+    (["--e", "0.05"], 2, "not smaller than the radius"),
+    (["--eps", "0"], 2, "eps > 0"),
+    (["--radius", "-0.01"], 2, "radius"),
+    (["--e", "1e-4"], 1, "real eigenvalues"),
+])
+def test_command_bad_input_and_no_answer(capsys, argv, status, words):
+    assert main(["critical-spin", *argv]) == status
+    captured = capsys.readouterr()
+    assert words in captured.err + captured.out
+    assert len((captured.err + captured.out).strip().splitlines()) == 1
