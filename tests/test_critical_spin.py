@@ -184,3 +184,24 @@ def test_command_bad_input_and_no_answer(capsys, argv, status, words):
     captured = capsys.readouterr()
     assert words in captured.err + captured.out
     assert len((captured.err + captured.out).strip().splitlines()) == 1
+
+
+@pytest.mark.slow
+def test_the_full_models_hopf_curves_end_at_the_closed_form():
+    """The dynamics layer continues ODE Model 1's Hopf points of the inverted spin from eps = 0.25 m/s down to
+    eps = 0.005 m/s: HOPF1 (the nutation) tends to omega_c and HOPF2 (the precession) to the spin where (C3)
+    turns the precession growing, both with a distance proportional to eps^2."""
+    import tippedisk_analysis as td
+    from tippedisk_analysis.analysis import spin_continuation as sc
+
+    found = cs.omega_critical()
+    branch = sc.continue_branch("inverted", "omega", 0.0, 100.0, setup=td.Setup(friction=td.Friction(eps=0.25)))
+    for label, limit in (("HOPF1", found.omega_critical), ("HOPF2", found.omega_precession)):
+        curve = sc.continue_curve(branch, label, ("omega", "eps"), bounds={"eps": (0.005, 0.4)})
+        assert curve.attrs["status"] == "completed"
+        eps, omega = curve.eps.values, curve.omega.values
+        small = eps < 0.03
+        assert small.sum() >= 3 and eps.min() == pytest.approx(0.005)
+        coefficient = (omega[small] - limit) / eps[small] ** 2
+        assert np.ptp(coefficient) < 0.15 * np.abs(coefficient).mean(), coefficient  # O(eps^2), one coefficient
+        assert abs(omega[np.argmin(eps)] - limit) < 2e-4 * limit

@@ -136,15 +136,26 @@ def first_order_pairs(c2, c0, a3, a1) -> tuple:
 
 @dataclass(frozen=True)
 class CriticalSpin:
-    """omega_c [rad/s] (C4) of a disk, with the precession's rate there (C3, per eps) and ``status``:
-    completed; no_crossing (the nutation does not turn from growing to damped on SCAN) or not_elliptic (the
-    rolling inverted spin is a saddle at every Omega on SCAN), both with omega_c NaN."""
+    """omega_c [rad/s] (C4) of a disk, with the nutation's frequency and the precession's rate there (C3, per
+    eps), the spin above which the precession grows (``omega_precession``, NaN if it does not turn on SCAN) and
+    ``status``: completed; no_crossing (the nutation does not turn from growing to damped on SCAN) or
+    not_elliptic (the rolling inverted spin is a saddle at every Omega on SCAN), both with omega_c NaN."""
 
     omega_critical: float
     nu_nutation: float  # rad/s, the nutation frequency at omega_c
     rate_precession: float  # 1/m: Re lambda / eps of the precession at omega_c (> 0: it grows)
+    omega_precession: float  # rad/s: the precession pair turns from damped to growing there
     status: str
     message: str
+
+
+def _first_turn(rate, grid: np.ndarray, values: np.ndarray, growing_to_damped: bool) -> float:
+    """The first zero of ``rate`` on ``grid`` where its sign changes the given way (NaN if none)."""
+    sign = -1.0 if growing_to_damped else 1.0
+    change = np.flatnonzero((sign * values[:-1] < 0) & (sign * values[1:] > 0))
+    if change.size == 0:
+        return float("nan")
+    return float(brentq(rate, grid[change[0]], grid[change[0] + 1], xtol=1e-12, rtol=1e-14))
 
 
 def omega_critical(disk: Disk | None = None, gravity: float = 9.81, mu: float = 0.3) -> CriticalSpin:
@@ -154,22 +165,24 @@ def omega_critical(disk: Disk | None = None, gravity: float = 9.81, mu: float = 
     disk = Disk() if disk is None else disk
     grid = np.linspace(*SCAN)
 
-    def rate(w):
-        return rates(w, disk, gravity, mu)["rate_nutation"]
+    def rate(key):
+        return lambda w: rates(w, disk, gravity, mu)[key]
 
-    values = np.array([rate(w) for w in grid])
-    change = np.flatnonzero((values[:-1] > 0) & (values[1:] < 0))
+    nutation = np.array([rate("rate_nutation")(w) for w in grid])
+    precession = np.array([rate("rate_precession")(w) for w in grid])
+    w_p = _first_turn(rate("rate_precession"), grid, precession, growing_to_damped=False)
     span = f"{SCAN[0]:g}-{SCAN[1]:g} rad/s"
-    if not np.isfinite(values).any():
-        return CriticalSpin(float("nan"), float("nan"), float("nan"), "not_elliptic",
+    nan = float("nan")
+    if not np.isfinite(nutation).any():
+        return CriticalSpin(nan, nan, nan, nan, "not_elliptic",
                             f"the rolling inverted spin has real eigenvalues at every Omega on {span} (no nutation "
                             "to damp): the disk cannot settle near it")
-    if change.size == 0:
-        return CriticalSpin(float("nan"), float("nan"), float("nan"), "no_crossing",
+    w = _first_turn(rate("rate_nutation"), grid, nutation, growing_to_damped=True)
+    if math.isnan(w):
+        return CriticalSpin(nan, nan, nan, w_p, "no_crossing",
                             f"the nutation of the inverted spin does not turn from growing to damped on {span}")
-    w = brentq(rate, grid[change[0]], grid[change[0] + 1], xtol=1e-12, rtol=1e-14)
     at = rates(w, disk, gravity, mu)
-    return CriticalSpin(float(w), at["nu_nutation"], at["rate_precession"], "completed",
+    return CriticalSpin(w, at["nu_nutation"], at["rate_precession"], w_p, "completed",
                         f"the nutation of the inverted spin is damped above {w:.4f} rad/s")
 
 
