@@ -35,6 +35,7 @@ napoleon_numpy_docstring = True
 html_theme = "furo"  # wraps code and tables to the window, fits a laptop screen
 html_title = f"tippedisk_analysis {release}"
 suppress_warnings = ["myst.header"]  # pages written for GitHub start at level-2 headings in places
+smartquotes = False  # "--disk" stays two hyphens in option tables and prose (no en dash)
 
 # the public modules of the API reference: (module, title); a module's public names are its __all__
 API_MODULES = (
