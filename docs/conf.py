@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import importlib
 import os
+import re
 from pathlib import Path
 
 import tippedisk_analysis
@@ -62,8 +63,6 @@ API_MODULES = (
 
 def _cli_examples() -> dict:
     """The first example of each command printed in the docs or the README (``tippedisk NAME ...``)."""
-    import re
-
     from tippedisk_analysis.cli.registry import COMMANDS
 
     text = "\n".join(p.read_text() for p in sorted(HERE.glob("*.md"))) + (HERE.parent / "README.md").read_text()
@@ -135,6 +134,7 @@ def _api_pages() -> dict:
         slug = module_name.replace("tippedisk_analysis", "td").replace(".", "_")
         overview.append(f"| [`{module_name}`](api/{slug}.md) | {title} |")
         summary = (module.__doc__ or "").strip().split("\n\n")[0]
+        summary = re.sub(r":(?:class|func|mod|meth|attr):`~?\.?([^`]+)`", r"`\1`", summary)  # markdown, not RST roles
         lines = [f"# {title}", "", f"`{module_name}`: {summary}", ""]
         if module_name in examples:  # docs/api_examples.py (tests/test_docs.py runs each)
             lines += ["Example:", "", "```python", examples[module_name].strip(), "```", ""]

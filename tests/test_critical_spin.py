@@ -12,6 +12,7 @@ import math
 import numpy as np
 import pytest
 
+from tippedisk_analysis import errors as td_errors
 from tippedisk_analysis.analysis import critical_spin as cs
 from tippedisk_analysis.analysis import inversion
 from tippedisk_analysis.analysis.rolling import spin_eigenvalues, spin_state
@@ -106,7 +107,7 @@ def test_critical_spin_is_where_the_full_models_nutation_turns(name):
              for eps in (1e-2, 1e-3)]
     assert error[1] < 1e-3
     assert 50 < error[0] / error[1] < 200  # O(eps^2): eps / 10 -> error / 100
-    assert abs(cs.check_against_jacobian(w, Setup(disk=disk))) < 1e-5  # per eps [1/m]; slopes are O(1)
+    assert abs(cs.check_against_jacobian(w, Setup(disk=disk))) < 1e-6  # of the real part 1 rad/s higher
 
 
 def test_critical_spin_does_not_depend_on_mu():
@@ -205,3 +206,49 @@ def test_the_full_models_hopf_curves_end_at_the_closed_form():
         coefficient = (omega[small] - limit) / eps[small] ** 2
         assert np.ptp(coefficient) < 0.15 * np.abs(coefficient).mean(), coefficient  # O(eps^2), one coefficient
         assert abs(omega[np.argmin(eps)] - limit) < 2e-4 * limit
+
+
+def test_radius_and_eccentricity_options_are_checked_together(capsys):
+    """--radius is not checked against the default e before --e applies (e = 1 mm on a 2 mm disk is a disk)."""
+    status = main(["critical-spin", "--e", "0.001", "--radius", "0.002"])
+    assert "0.0025" not in capsys.readouterr().err and status in (0, 1)
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["--mu", "0"], "needs mu > 0"),
+    (["--gamma0", "1.4"], "already above the criterion"),
+    (["--gamma0", "4"], "in [-pi, pi]"),
+])
+def test_command_refuses_what_has_no_critical_spin_question(capsys, argv, words):
+    assert main(["critical-spin", *argv]) == 2
+    err = capsys.readouterr().err
+    assert words in err and len(err.strip().splitlines()) == 1
+
+
+def test_the_full_models_threshold_is_printed_even_without_omega_c():
+    from tippedisk_analysis.cli.critical_spin import _text
+
+    out = {"omega_critical": None, "initial_spin_threshold": None, "message": "no nutation to damp", "mu": 0.3,
+           "eps": 0.1, "full_model_status": "completed", "full_model_threshold": 29.55, "full_model_message": ""}
+    assert "inverts above 29.5500 rad/s" in _text(out)
+
+
+def test_prediction_map_builds_small_drilled_disks_and_refuses_bad_grids():
+    ds = cs.prediction_map([1.5e-3], [0.03, 0.045])  # r = 30 mm: the hole moved to b = 4.5 mm
+    assert list(ds.status.values[0]) == [cs.MAP_FLAGS["completed"]] * 2
+    drilled = Disk.from_geometry(r=0.03, b=1.5e-3 * (0.03**2 - 0.015**2) / 0.015**2)
+    assert ds.omega_critical.values[0, 0] == pytest.approx(cs.omega_critical(drilled).omega_critical, rel=1e-12)
+    for e, r in (([np.nan], [0.04]), ([], [0.04]), ([1e-3], [-0.04])):
+        with pytest.raises(td_errors.ParameterError):
+            cs.prediction_map(e, r)
+
+
+def test_spin_threshold_refuses_a_fractional_scan():
+    with pytest.raises(td_errors.ParameterError, match="integer scan"):
+        inversion.spin_threshold(scan=2.7)
+
+
+def test_critical_spin_needs_friction_and_gravity():
+    for bad in ({"mu": 0.0}, {"mu": -1.0}, {"gravity": 0.0}, {"mu": math.nan}):
+        with pytest.raises(td_errors.ParameterError, match="needs"):
+            cs.omega_critical(**bad)

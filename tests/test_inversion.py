@@ -72,7 +72,8 @@ def test_the_set_valued_limit_never_lifts_S_above_G():
     (lambda: inversion.outcome(40.0, model="moreau"), "unknown model 'moreau'"),
     (lambda: inversion.spin_threshold(bracket=(40.0, 30.0)), "give two spins 0 < low < high"),
     (lambda: inversion.spin_threshold(bracket=(30.0, math.inf)), "give two spins 0 < low < high"),
-    (lambda: inversion.spin_threshold(scan=1), "give scan >= 2"),
+    (lambda: inversion.spin_threshold(scan=1), "give an integer scan >= 2"),
+    (lambda: inversion.outcome(40.0, gamma0=1.4), "already above the criterion"),
     (lambda: inversion.outcome(40.0, horizon_s=-1.0), "must be positive"),
 ])
 def test_bad_input_is_one_line_naming_the_fix(call, fragment):

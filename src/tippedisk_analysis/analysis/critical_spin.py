@@ -40,6 +40,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
@@ -163,6 +164,9 @@ def omega_critical(disk: Disk | None = None, gravity: float = 9.81, mu: float = 
     from growing to damped, refined by Brent's method on (C3). Independent of mu and eps (module docstring);
     mu only scales the rate reported."""
     disk = Disk() if disk is None else disk
+    for name, value, why in (("gravity", gravity, "in m/s^2"), ("mu", mu, "friction is what damps the nutation")):
+        if not (isinstance(value, numbers.Real) and math.isfinite(value) and value > 0):
+            raise ParameterError(f"{name} = {value!r}: the critical spin needs {name} > 0 ({why})")
     grid = np.linspace(*SCAN)
 
     def rate(key):
@@ -175,8 +179,8 @@ def omega_critical(disk: Disk | None = None, gravity: float = 9.81, mu: float = 
     nan = float("nan")
     if not np.isfinite(nutation).any():
         return CriticalSpin(nan, nan, nan, nan, "not_elliptic",
-                            f"the rolling inverted spin has real eigenvalues at every Omega on {span} (no nutation "
-                            "to damp): the disk cannot settle near it")
+                            f"the rolling inverted spin has real eigenvalues at every Omega on {span}: no nutation "
+                            "to damp, so the closed form gives no critical spin for this disk")
     w = _first_turn(rate("rate_nutation"), grid, nutation, growing_to_damped=True)
     if math.isnan(w):
         return CriticalSpin(nan, nan, nan, w_p, "no_crossing",
@@ -190,7 +194,8 @@ def initial_spin_threshold(omega_c: float, setup: Setup | None = None, gamma0: f
     """(C5) the initial spin [rad/s] of Table 3's start (gamma0 [rad]) whose rolling energy equals that of the
     inverted spin at omega_c: the least spin with which the disk can reach it (friction's losses neglected)."""
     setup = Setup() if setup is None else setup
-    gamma0 = InitialState().gamma if gamma0 is None else gamma0
+    gamma0 = InitialState().gamma if gamma0 is None else float(gamma0)
+    inversion.check_start(setup, gamma0)
     if not (math.isfinite(omega_c) and omega_c > 0):
         raise ParameterError(f"omega_c = {omega_c} rad/s: give a positive finite critical spin")
     system = rolling.reduced_system()
@@ -237,15 +242,23 @@ def derive():
     return symbols, K0, K1, J.diff(eps, 2).applyfunc(sp.simplify)
 
 
-def check_against_jacobian(omega_c: float, setup: Setup | None = None, eps: float = 1e-4) -> float:
-    """Re lambda / eps [1/m] of the nutation pair of the slow flow's numerical Jacobian (heyoka) at the inverted
-    spin omega_c: zero to O(eps) when (C4) is right (the answer checks itself)."""
-    setup = inversion.with_eps(setup, eps)
-    system = slow_flow.system()
-    ev = np.linalg.eigvals(system.jacobian(spin_state("inverted", omega_c), inversion.parameters("slow", setup)))
-    oscillating = ev[np.abs(ev.imag) > 1e-9 * max(1.0, omega_c)]
-    nutation = oscillating[np.argmin(np.abs(oscillating.imag))]
-    return float(nutation.real / eps)
+CHECK_EPS_PER_MU = 3e-4  # m/s: the eps of the check over mu (the Jacobian depends on eps / mu only)
+
+
+def check_against_jacobian(omega_c: float, setup: Setup | None = None) -> float:
+    """The real part of the nutation pair of the slow flow's numerical Jacobian (heyoka) at the inverted spin
+    omega_c, relative to its size 1 rad/s higher, at eps = CHECK_EPS_PER_MU mu: zero to O(eps / mu) when (C4) is
+    right (the answer checks itself), whatever the setup's mu."""
+    setup = Setup() if setup is None else setup
+    setup = inversion.with_eps(setup, CHECK_EPS_PER_MU * setup.friction.mu)
+    system, pars = slow_flow.system(), inversion.parameters("slow", setup)
+
+    def nutation_real(w):
+        ev = np.linalg.eigvals(system.jacobian(spin_state("inverted", w), pars))
+        oscillating = ev[np.abs(ev.imag) > 1e-9 * max(1.0, w)]
+        return oscillating[np.argmin(np.abs(oscillating.imag))].real
+
+    return float(nutation_real(omega_c) / abs(nutation_real(omega_c + 1.0)))
 
 
 MAP_FLAGS = {"completed": 0, "no_crossing": 1, "not_elliptic": 2, "no_disk": 3}
@@ -260,15 +273,18 @@ def prediction_map(e_values, r_values, *, base: Disk | None = None, gravity: flo
     given by values keeps m and A, B, C about G. Points without a value hold -1 and say why in ``status``."""
     base = Disk.from_geometry() if base is None else base
     e_values, r_values = np.asarray(e_values, dtype=float), np.asarray(r_values, dtype=float)
+    for name, values in (("e", e_values), ("r", r_values)):
+        if values.ndim != 1 or values.size == 0 or not np.all(np.isfinite(values)) or np.any(values < 0):
+            raise ParameterError(f"{name} values {values!r} [m]: give a non-empty 1-D array of finite values >= 0")
     shape = (e_values.size, r_values.size)
     omega_c, threshold = np.full(shape, PADDING), np.full(shape, PADDING)
     status = np.full(shape, MAP_FLAGS["no_disk"], dtype=np.int8)
     for j, r in enumerate(r_values):
         for i, e in enumerate(e_values):
             try:
-                if base.geometry is not None:
-                    disk = Disk.from_geometry(base.geometry.rho, r, base.geometry.a, base.geometry.b,
-                                              base.geometry.h).with_eccentricity(e)
+                if base.geometry is not None:  # the hole offset that gives e on a disk of radius r
+                    g = dataclasses.replace(base.geometry, r=float(r), b=0.5 * (float(r) - base.geometry.a))
+                    disk = Disk.from_geometry(g.rho, g.r, g.a, g.offset_for(float(e)), g.h)
                 else:
                     disk = dataclasses.replace(base, r=float(r), e=float(e))
             except ParameterError:
@@ -295,7 +311,7 @@ def prediction_map(e_values, r_values, *, base: Disk | None = None, gravity: flo
     config = {"e": e_values.tolist(), "r": r_values.tolist(), "gravity": gravity,
               "gamma0": InitialState().gamma if gamma0 is None else gamma0,
               "base": "drilled geometry" if base.geometry is not None else dataclasses.asdict(base)}
-    ds.attrs = make_attrs("critical_spin_map", config, "completed",
+    ds.attrs = make_attrs("critical_spin_map", config, "completed" if n_done else "no_value",
                           f"omega_c at {n_done} of {status.size} (e, r) points; the others: see status",
                           title="Critical spin of the tippedisk in closed form over eccentricity and radius")
     return ds

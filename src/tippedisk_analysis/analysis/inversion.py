@@ -21,6 +21,7 @@ import copy
 import dataclasses
 import functools
 import math
+import numbers
 from dataclasses import dataclass
 
 import heyoka as hy
@@ -34,7 +35,8 @@ from ..models import ode, reduced, slow_flow
 from ..parameters import InitialState, Setup
 from ..results import make_attrs
 
-__all__ = ["MODELS", "INVERSION_HEIGHT", "Outcome", "Threshold", "horizon", "system", "start_state", "parameters",
+__all__ = ["MODELS", "INVERSION_HEIGHT", "Outcome", "Threshold", "horizon", "system", "start_state", "check_start",
+           "parameters",
            "outcome", "spin_threshold", "with_eps", "threshold_dataset"]
 
 MODELS = ("smooth", "slow")
@@ -108,6 +110,19 @@ def start_state(model: str, spin: float, setup: Setup, gamma0: float) -> np.ndar
     return np.array([*angles, *rest["omega"]])
 
 
+def check_start(setup: Setup, gamma0: float) -> None:
+    """ParameterError unless gamma0 [rad] is a finite angle in [-pi, pi] whose start has S below the criterion
+    (z_S < r + 0.8 e): a start already counted as inverted has no threshold."""
+    if not (math.isfinite(gamma0) and abs(gamma0) <= math.pi):
+        raise ParameterError(f"gamma0 = {gamma0!r} rad: give an angle in [-pi, pi] (Table 3: -pi/2 + 0.1)")
+    z_S = float(system("slow").observe(start_state("slow", 0.0, setup, gamma0), parameters("slow", setup))["z_S"])
+    disk = setup.disk
+    if z_S >= disk.r + INVERSION_HEIGHT * disk.e:
+        raise ParameterError(f"gamma0 = {gamma0:.4g} rad starts S at z_S = r + {(z_S - disk.r) / disk.e:.3f} e, "
+                             f"already above the criterion r + {INVERSION_HEIGHT} e; give a start with S lower "
+                             "(Table 3: gamma0 = -pi/2 + 0.1)")
+
+
 def parameters(model: str, setup: Setup) -> np.ndarray:
     """The model's runtime parameters for ``setup`` (eps from its friction)."""
     _check_model(model)
@@ -120,7 +135,8 @@ def outcome(spin: float, *, model: str = "smooth", setup: Setup | None = None, g
     """Run ``model`` from Table 3's start at initial spin ``spin`` [rad/s] until it inverts, ends or reaches
     the horizon (default :func:`horizon` of the setup's eps)."""
     setup = Setup() if setup is None else setup
-    gamma0 = InitialState().gamma if gamma0 is None else gamma0
+    gamma0 = InitialState().gamma if gamma0 is None else float(gamma0)
+    check_start(setup, gamma0)
     model_system = system(model)
     t_end = horizon(setup.friction.eps) if horizon_s is None else float(horizon_s)
     if not t_end > 0:
@@ -149,8 +165,12 @@ def spin_threshold(*, model: str = "smooth", setup: Setup | None = None, gamma0:
     low, high = map(float, bracket)
     if not (math.isfinite(low) and math.isfinite(high) and 0 < low < high):
         raise ParameterError(f"bracket = {bracket!r}: give two spins 0 < low < high in rad/s")
-    if int(scan) < 2 or not xtol > 0:
-        raise ParameterError(f"scan = {scan} and xtol = {xtol}: give scan >= 2 spins and xtol > 0 rad/s")
+    if not (isinstance(scan, numbers.Integral) and scan >= 2 and xtol > 0):
+        raise ParameterError(f"scan = {scan!r} and xtol = {xtol!r}: give an integer scan >= 2 spins and xtol > 0 "
+                             "rad/s")
+    setup = Setup() if setup is None else setup
+    gamma0 = InitialState().gamma if gamma0 is None else float(gamma0)
+    check_start(setup, gamma0)
     runs = []
 
     def decide(spin):

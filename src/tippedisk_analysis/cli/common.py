@@ -162,13 +162,10 @@ def disk_from_args(args, *, sweep_e: float | None = None, e_swept: bool = False)
         refuse(missing, "missing: --disk given needs all of --mass, --e, --radius, --A, --B, --C")
         return Disk(**{k: given[k] for k in ("m", "e", "r", "A", "B", "C")})
     refuse(present & {"A", "B", "C"}, "need(s) --disk given (with all of --mass, --e, --radius, --A, --B, --C)")
-    disk = Disk()
-    if "r" in present:
-        disk = dataclasses.replace(disk, r=given["r"])
+    shape = {k: given[k] for k in ("r", "e") if k in present}  # together: a new r is checked against the new e
+    disk = dataclasses.replace(Disk(), **shape)  # Table 2's A, B, C about G kept (Disk.with_eccentricity)
     if "m" in present:
         disk = disk.with_mass(given["m"])
-    if "e" in present:
-        disk = disk.with_eccentricity(given["e"])
     return disk
 
 

@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import json
-import math
 
 from .common import add_disk, disk_from_args, finite_float
 from .registry import command
@@ -12,13 +11,15 @@ from .registry import command
 
 def _arguments(p) -> None:
     p.add_argument("--gamma0", type=finite_float,
-                   help="gamma(0) of the Table 3 start [rad] (default -pi/2 + 0.1: S 0.1 rad from below G)")
+                   help="gamma(0) of the Table 3 start [rad], the angle itself, in [-pi, pi] (default -pi/2 + 0.1 = "
+                        "-1.4708: S 0.1 rad from straight below G; other commands' --dgamma0 is that 0.1)")
     p.add_argument("--mu", type=finite_float, help="friction coefficient [-] (0.3; omega_c does not depend on it)")
     p.add_argument("--eps", type=finite_float,
                    help="smoothing of (2.29) [m/s] (0.1; the prediction does not depend on it; with --simulate: "
                         "the full model's eps, horizon 150 s x max(1, 0.1/eps))")
     p.add_argument("--simulate", action="store_true",
-                   help="also find the full model's threshold by bisection (ODE Model 1, about a minute at eps 0.1)")
+                   help="also find the full model's threshold by bisection (ODE Model 1: seconds to a minute at eps "
+                        "0.1, longer at small eps)")
     p.add_argument("--json", action="store_true",
                    help='print one JSON object: {"omega_critical": ..., "initial_spin_threshold": ..., ...} in rad/s')
     add_disk(p)
@@ -36,14 +37,15 @@ def critical_spin(args) -> int:
     friction = {k: v for k, v in (("mu", args.mu), ("eps", args.eps)) if v is not None}
     setup = Setup(disk=disk_from_args(args), friction=dataclasses.replace(Friction(), **friction))
     gamma0 = InitialState().gamma if args.gamma0 is None else args.gamma0
+    inversion.check_start(setup, gamma0)  # before any work
     found = cs.omega_critical(setup.disk, setup.gravity, setup.friction.mu)
     out = {"omega_critical": None, "initial_spin_threshold": None, "status": found.status, "message": found.message,
-           "gamma0": gamma0}
+           "gamma0": gamma0, "mu": setup.friction.mu, "eps": setup.friction.eps}
     if found.status == "completed":
         out["omega_critical"] = found.omega_critical
         out["initial_spin_threshold"] = cs.initial_spin_threshold(found.omega_critical, setup, gamma0)
         out["nutation_frequency"] = found.nu_nutation
-        out["check_nutation_rate_per_eps"] = cs.check_against_jacobian(found.omega_critical, setup)
+        out["check_relative_nutation_rate"] = cs.check_against_jacobian(found.omega_critical, setup)
     if args.simulate:
         low = 0.8 * out["initial_spin_threshold"] if out["initial_spin_threshold"] else 15.0
         th = inversion.spin_threshold(setup=setup, gamma0=gamma0, bracket=(low, 2.0 * low), scan=11, xtol=1e-3)
@@ -60,20 +62,26 @@ def critical_spin(args) -> int:
 
 def _text(out: dict) -> str:
     if out["omega_critical"] is None:
-        return f"no critical spin: {out['message']}"
-    lines = [f"omega_c = {out['omega_critical']:.4f} rad/s: {out['message']} (formula (C4), independent of mu "
-             "and eps)",
-             f"initial spin threshold >= {out['initial_spin_threshold']:.4f} rad/s for gamma0 = {out['gamma0']:.4f} "
-             "rad (C5: the start's rolling energy reaches the inverted spin's at omega_c; friction's losses on "
-             "the way neglected, so the full model needs more)",
-             f"check: the slow flow's Jacobian at omega_c (eps 1e-4) gives the nutation Re lambda / eps = "
-             f"{out['check_nutation_rate_per_eps']:.2e} 1/m (0 when the formula holds)"]
+        lines = [f"no critical spin: {out['message']}"]
+    else:
+        lines = [f"omega_c = {out['omega_critical']:.4f} rad/s: {out['message']} (formula (C4), independent of mu "
+                 "and eps)",
+                 f"initial spin threshold >= {out['initial_spin_threshold']:.4f} rad/s for gamma0 = "
+                 f"{out['gamma0']:.4f} rad (C5: the start's rolling energy reaches the inverted spin's at omega_c; "
+                 "friction's losses on the way neglected, so the full model needs more)",
+                 f"check: at omega_c the slow flow's Jacobian (heyoka, small eps) gives the nutation a real part "
+                 f"{out['check_relative_nutation_rate']:.1e} of its size 1 rad/s higher (0 when the formula holds)"]
     if "full_model_status" in out:
-        full = out["full_model_threshold"]
-        if full is not None and math.isfinite(full):
-            diff = full - out["initial_spin_threshold"]
-            lines.append(f"full model (ODE Model 1): inverts above {full:.4f} rad/s, {diff:+.4f} rad/s "
-                         f"({100 * diff / full:+.2f} %) above the prediction")
+        full, predicted = out["full_model_threshold"], out["initial_spin_threshold"]
+        if full is None:
+            lines.append(f"full model (ODE Model 1, eps {out['eps']:g} m/s, mu {out['mu']:g}): "
+                         f"{out['full_model_status']}: {out['full_model_message']}")
+        elif predicted is None:
+            lines.append(f"full model (ODE Model 1, eps {out['eps']:g} m/s, mu {out['mu']:g}): inverts above "
+                         f"{full:.4f} rad/s")
         else:
-            lines.append(f"full model (ODE Model 1): {out['full_model_status']}: {out['full_model_message']}")
+            diff = full - predicted
+            lines.append(f"full model (ODE Model 1, eps {out['eps']:g} m/s, mu {out['mu']:g}): inverts above "
+                         f"{full:.4f} rad/s, {diff:+.4f} rad/s ({100 * diff / predicted:+.2f} % of the prediction) "
+                         "above it")
     return "\n".join(lines)
