@@ -68,6 +68,24 @@ def test_the_set_valued_limit_never_lifts_S_above_G():
         assert np.ptp(late) < 1e-9
 
 
+@pytest.mark.slow
+def test_moreau_model_1_never_lifts_S_above_G_and_its_energy_loss_is_the_time_steps():
+    """Moreau Model 1 from Table 3 at 36 rad/s for 150 s at two time steps: S stays below G; the energy it loses
+    after 1 s falls with dt (time-stepping dissipation, not friction's slow drift), and S's highest point falls
+    with it towards the event-driven model's r - 0.994 e."""
+    lost, highest = [], []
+    for dt in (2e-5, 1e-5):
+        run = td.simulate("m1", 150.0, initial=InitialState(alpha_dot=36.0), dt=dt, store_every=int(round(1e-3 / dt)),
+                          progress=False)
+        assert run.attrs["status"] == "completed"
+        time, energy = run.time.values, run.E_tot.values
+        lost.append(energy[np.searchsorted(time, 1.0)] - energy[-1])
+        highest.append(float(run.z_S.max()))
+        assert highest[-1] < DISK.r
+    assert lost[0] > 1.2 * lost[1] > 0  # about first order in dt
+    assert highest[1] < highest[0]
+
+
 @pytest.mark.parametrize("call, fragment", [
     (lambda: inversion.outcome(40.0, model="moreau"), "unknown model 'moreau'"),
     (lambda: inversion.spin_threshold(bracket=(40.0, 30.0)), "give two spins 0 < low < high"),
