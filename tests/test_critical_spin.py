@@ -252,3 +252,16 @@ def test_critical_spin_needs_friction_and_gravity():
     for bad in ({"mu": 0.0}, {"mu": -1.0}, {"gravity": 0.0}, {"mu": math.nan}):
         with pytest.raises(td_errors.ParameterError, match="needs"):
             cs.omega_critical(**bad)
+
+
+@pytest.mark.slow
+def test_the_energy_bound_holds_for_starts_with_S_below_G_only():
+    """(C5) bounds ODE Model 1's threshold from below while S starts below G (delta_0 = 1.0 rad: +5 %); a start
+    with S above G (delta_0 = 2.2 rad) passes the criterion in one swing, below the prediction (-3.4 %)."""
+    w_c = cs.omega_critical().omega_critical
+    for delta, above in ((1.0, True), (2.2, False)):
+        gamma0 = -0.5 * math.pi + delta
+        predicted = cs.initial_spin_threshold(w_c, gamma0=gamma0)
+        th = inversion.spin_threshold(gamma0=gamma0, bracket=(0.9 * predicted, 1.1 * predicted), scan=5, xtol=0.01)
+        assert th.status == "completed"
+        assert (th.spin > predicted) == above and abs(th.spin / predicted - 1) > 0.02, (delta, th.spin, predicted)

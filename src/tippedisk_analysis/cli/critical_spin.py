@@ -68,7 +68,7 @@ def _text(out: dict) -> str:
                  "and eps)",
                  f"initial spin threshold >= {out['initial_spin_threshold']:.4f} rad/s for gamma0 = "
                  f"{out['gamma0']:.4f} rad (C5: the start's rolling energy reaches the inverted spin's at omega_c; "
-                 "friction's losses on the way neglected, so the full model needs more)",
+                 "friction's losses on the way neglected: a lower bound for starts with S below G)",
                  f"check: at omega_c the slow flow's Jacobian (heyoka, small eps) gives the nutation a real part "
                  f"{out['check_relative_nutation_rate']:.1e} of its size 1 rad/s higher (0 when the formula holds)"]
     if "full_model_status" in out:
