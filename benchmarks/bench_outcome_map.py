@@ -84,8 +84,7 @@ def main() -> None:
     timed(f"dask {args.workers} processes, second map (warm workers)",
           lambda: sweeps.run_sweep(om.sweep(cfg), scheduler=client, progress=False))
     assert np.array_equal(dk["outcome"], ref["outcome"])
-    client.close()
-    cluster.close()
+    sweeps.close_cluster(client, cluster)
 
     with LocalCluster(n_workers=1, threads_per_worker=args.workers, processes=False,
                       dashboard_address=None) as c2, Client(c2) as cl2:

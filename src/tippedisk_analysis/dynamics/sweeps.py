@@ -26,8 +26,8 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
-import math
 import logging
+import math
 import os
 import shutil
 import signal
@@ -339,10 +339,26 @@ def run_sweep(sweep: Sweep, *, output=None, scheduler=None, threads: int | None 
     try:
         return _run(sweep, bounds, output, client, threads, progress, on_chunk, overwrite)
     finally:
-        if client is not None and client is not scheduler:
-            client.close()
         if cluster is not None:
-            cluster.close()
+            close_cluster(client, cluster)
+        elif client is not None and client is not scheduler:
+            client.close()
+
+
+def close_cluster(client, cluster) -> None:
+    """Close a dask ``client`` and the local ``cluster`` whose workers it runs on, without the error a worker's
+    heartbeat logs (with a traceback) when it meets the scheduler already closing: not an error of the work."""
+    with contextlib.suppress(Exception):
+        client.run(_quiet_worker_logs)
+    client.close()
+    cluster.close()
+
+
+def _quiet_worker_logs() -> None:
+    """In a worker of our local cluster, before it is closed: dask's logs only for critical events (a heartbeat
+    that finds the scheduler already gone logs an error with a traceback otherwise)."""
+    for name in ["distributed", *(n for n in logging.root.manager.loggerDict if n.startswith("distributed."))]:
+        logging.getLogger(name).setLevel(logging.CRITICAL)
 
 
 def _run(sweep: Sweep, bounds, output, client, threads, progress, on_chunk, overwrite) -> xr.Dataset:
