@@ -34,7 +34,7 @@ def main() -> None:
     import heyoka as hy
 
     from tippedisk_analysis.analysis import outcome_map as om
-    from tippedisk_analysis.dynamics import sweeps
+    from tippedisk_analysis.dynamics import schedulers, sweeps
     from tippedisk_analysis.testing import outcome_chunk_scalar
 
     cfg = om.MapConfig(ranges={"omega": (5.0, 80.0, args.n), "eps": (0.01, 0.3, args.n)}, t_end=args.t_end)
@@ -84,7 +84,7 @@ def main() -> None:
     timed(f"dask {args.workers} processes, second map (warm workers)",
           lambda: sweeps.run_sweep(om.sweep(cfg), scheduler=client, progress=False))
     assert np.array_equal(dk["outcome"], ref["outcome"])
-    sweeps.close_cluster(client, cluster)
+    schedulers.close_cluster(client, cluster)
 
     with LocalCluster(n_workers=1, threads_per_worker=args.workers, processes=False,
                       dashboard_address=None) as c2, Client(c2) as cl2:

@@ -61,7 +61,7 @@ def range_type(name: str):
 
 def scheduler_type(text: str) -> str:
     """argparse type for ``--scheduler``: a dask address or local:N with N >= 1."""
-    from ..dynamics.sweeps import parse_scheduler
+    from ..dynamics.schedulers import parse_scheduler
 
     try:
         parse_scheduler(text)

@@ -23,16 +23,12 @@ per worker are queued at a time, so the bookkeeping does not grow with the grid.
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import json
-import logging
 import math
 import os
 import shutil
-import signal
 import sys
-import threading
 import warnings
 from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
@@ -44,6 +40,7 @@ import xarray as xr
 
 from .. import files, resources
 from ..errors import Interrupted, OutputError, ParameterError, TippediskWarning
+from .schedulers import close_cluster, connect, parse_scheduler
 
 CHUNK_PATTERN = "chunk_{:05d}.nc"
 IN_FLIGHT_PER_WORKER = 2  # chunks queued per worker: enough to keep it busy, bounded for huge grids
@@ -258,62 +255,6 @@ def _read_chunk(path: Path, start: int, stop: int, variables, cfg_hash: str) -> 
     return None
 
 
-def parse_scheduler(scheduler: str) -> tuple[str, int | None]:
-    """("local", N) for ``local`` / ``local:N``, else ("address", None); ParameterError for a bad N."""
-    text = str(scheduler).strip()
-    if text == "local" or text.startswith("local:"):
-        count = text.partition(":")[2]
-        if not count:
-            return "local", os.cpu_count() or 1
-        try:
-            n = int(count)
-        except ValueError:
-            n = 0
-        if n < 1:
-            raise ParameterError(f"scheduler {text!r}: local:N needs N >= 1 worker processes; give e.g. local:2",
-                                 cli=f"--scheduler {text!r}: local:N needs N >= 1 worker processes; give e.g. "
-                                     "--scheduler local:2")
-        return "local", n
-    if not text:
-        raise ParameterError("scheduler is empty; give a dask scheduler address (tcp://host:8786) or local:N")
-    return "address", None
-
-
-@contextlib.contextmanager
-def _quiet_children():
-    """Worker processes started here ignore Ctrl-C (a terminal sends it to the whole process group):
-    this process stops them cleanly instead, and their logs stay at the error level."""
-    os.environ.setdefault("DASK_LOGGING__DISTRIBUTED", "error")
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)  # inherited by spawned processes
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, previous if previous is not None else signal.default_int_handler)
-
-
-def _client(scheduler: str):
-    kind, n = parse_scheduler(scheduler)
-    try:
-        from distributed import Client, LocalCluster
-    except ImportError:  # pragma: no cover
-        raise ParameterError("a scheduler needs dask.distributed; pip install 'dask[distributed]'") from None
-    if kind == "local":
-        resources.check_memory(n * resources.WORKER_BYTES, f"a local dask cluster of {n} worker processes",
-                               f"use fewer workers (local:{os.cpu_count() or 1} uses every core)")
-        with _quiet_children():
-            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-                                   silence_logs=logging.ERROR)
-        return Client(cluster), cluster
-    try:
-        return Client(scheduler, timeout="3s"), None
-    except (OSError, ValueError) as exc:
-        raise ParameterError(f"cannot reach the dask scheduler {scheduler!r} ({exc}); "
-                             "check the address (e.g. tcp://host:8786)") from None
-
-
 def run_sweep(sweep: Sweep, *, output=None, scheduler=None, threads: int | None = None,
               progress: bool = True, on_chunk=None, overwrite: bool = False) -> xr.Dataset:
     """Run (or resume) the sweep and return the merged dataset; write it to ``output`` if given.
@@ -335,7 +276,7 @@ def run_sweep(sweep: Sweep, *, output=None, scheduler=None, threads: int | None 
     bounds = chunk_bounds(sweep)
     client, cluster = None, None
     if scheduler is not None:  # connect first: a bad address leaves nothing behind
-        client, cluster = (scheduler, None) if hasattr(scheduler, "submit") else _client(str(scheduler))
+        client, cluster = (scheduler, None) if hasattr(scheduler, "submit") else connect(str(scheduler))
     try:
         return _run(sweep, bounds, output, client, threads, progress, on_chunk, overwrite)
     finally:
@@ -343,22 +284,6 @@ def run_sweep(sweep: Sweep, *, output=None, scheduler=None, threads: int | None 
             close_cluster(client, cluster)
         elif client is not None and client is not scheduler:
             client.close()
-
-
-def close_cluster(client, cluster) -> None:
-    """Close a dask ``client`` and the local ``cluster`` whose workers it runs on, without the error a worker's
-    heartbeat logs (with a traceback) when it meets the scheduler already closing: not an error of the work."""
-    with contextlib.suppress(Exception):
-        client.run(_quiet_worker_logs)
-    client.close()
-    cluster.close()
-
-
-def _quiet_worker_logs() -> None:
-    """In a worker of our local cluster, before it is closed: dask's logs only for critical events (a heartbeat
-    that finds the scheduler already gone logs an error with a traceback otherwise)."""
-    for name in ["distributed", *(n for n in logging.root.manager.loggerDict if n.startswith("distributed."))]:
-        logging.getLogger(name).setLevel(logging.CRITICAL)
 
 
 def _run(sweep: Sweep, bounds, output, client, threads, progress, on_chunk, overwrite) -> xr.Dataset:
