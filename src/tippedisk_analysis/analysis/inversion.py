@@ -10,6 +10,8 @@ Models (MODELS):
 * ``slow``: its slow flow (:mod:`tippedisk_analysis.models.slow_flow`), rolling with the first-order slip.
   It exists only inside the friction cone: a run that reaches the cone before S rises ends there (status
   ``cone``) and counts as not inverting (chosen; the smooth model slides from there).
+* ``held``: the slow flow with the spin about the vertical held at the run's spin
+  (:mod:`tippedisk_analysis.models.held_spin`, a reduced model): its threshold is one of the held spin.
 
 Outcomes: ``inverted``; ``horizon``, ``fell`` (the tilt reached the fall angle) and ``cone`` do not invert;
 ``lift_off`` (the bilateral contact stops being valid) and ``nonfinite`` decide nothing.
@@ -31,7 +33,7 @@ import xarray as xr
 from .. import kinematics as kin
 from ..dynamics import Event, System
 from ..errors import ParameterError
-from ..models import ode, reduced, slow_flow
+from ..models import held_spin, ode, reduced, slow_flow
 from ..parameters import InitialState, Setup
 from ..results import make_attrs
 
@@ -39,7 +41,7 @@ __all__ = ["MODELS", "INVERSION_HEIGHT", "Outcome", "Threshold", "horizon", "sys
            "parameters",
            "outcome", "spin_threshold", "with_eps", "threshold_dataset"]
 
-MODELS = ("smooth", "slow")
+MODELS = ("smooth", "slow", "held")
 INVERSION_HEIGHT = 0.8  # z_S > r + 0.8 e: S well above G
 HORIZON = 150.0  # s, at eps = HORIZON_EPS
 HORIZON_EPS = 0.1  # m/s
@@ -88,7 +90,7 @@ def horizon(eps: float) -> float:
 def system(model: str) -> System:
     """The model's System with the terminal event ``inverted`` (z_S rising through r + 0.8 e) added."""
     _check_model(model)
-    base = reduced.system() if model == "smooth" else slow_flow.system()
+    base = {"smooth": reduced.system, "slow": slow_flow.system, "held": held_spin.system}[model]()
     z_S = base.observables["z_S"][0]
     r, e = (hy.par[base.parameter_index(name)] for name in ("r", "e"))
     return base.with_events(base.name + "_inversion", [Event("inverted", z_S - r - INVERSION_HEIGHT * e, "positive")])
@@ -107,6 +109,8 @@ def start_state(model: str, spin: float, setup: Setup, gamma0: float) -> np.ndar
     angles = [initial.beta, initial.gamma]
     if model == "smooth":
         return np.array([*angles, rest["v_G"][0], rest["v_G"][1], *rest["omega"]])
+    if model == "held":
+        return np.array([*angles, *initial.euler_rates[1:]])
     return np.array([*angles, *rest["omega"]])
 
 
@@ -123,10 +127,10 @@ def check_start(setup: Setup, gamma0: float) -> None:
                              "(Table 3: gamma0 = -pi/2 + 0.1)")
 
 
-def parameters(model: str, setup: Setup) -> np.ndarray:
-    """The model's runtime parameters for ``setup`` (eps from its friction)."""
+def parameters(model: str, setup: Setup, spin: float = held_spin.DEFAULT_SPIN) -> np.ndarray:
+    """The model's runtime parameters for ``setup`` (eps from its friction; ``spin`` [rad/s]: the held model's)."""
     _check_model(model)
-    values = dict(zip(ode.PARAMETER_NAMES, ode.parameter_vector(setup)))
+    values = {**dict(zip(ode.PARAMETER_NAMES, ode.parameter_vector(setup))), "spin": float(spin)}
     return np.array([values[name] for name in system(model).parameter_names])
 
 
@@ -144,7 +148,7 @@ def outcome(spin: float, *, model: str = "smooth", setup: Setup | None = None, g
     ta = copy.deepcopy(model_system.taylor(TOL, events=True))
     ta.time = 0.0
     ta.state[:] = start_state(model, spin, setup, gamma0)
-    ta.pars[:] = parameters(model, setup)[: len(ta.pars)]
+    ta.pars[:] = parameters(model, setup, spin)[: len(ta.pars)]
     result = ta.propagate_until(t_end)[0]
     if not (np.all(np.isfinite(ta.state)) and math.isfinite(ta.time)):
         return Outcome(float(spin), "nonfinite", float(ta.time))

@@ -56,18 +56,21 @@ class RollingDynamics:
     lambda_T_G: list  # the same, G-frame components [N]
     cone_margin: object  # mu lambda_N - |lambda_T| [N]
     friction_power: object  # lambda_T . s, the power of the contact force [W] (0 when rolling)
+    holding_torque: object  # the torque about the vertical that holds alpha_dot (hold_spin) [N m], else 0
     energies: dict  # E_kin, E_pot [J]
     z_S: object
     g_N1: object
 
 
-def rolling_dynamics(trig: Trig, omega, slip=None, *, pars=P, sqrt=hy.sqrt) -> RollingDynamics:
+def rolling_dynamics(trig: Trig, omega, slip=None, *, hold_spin=False, pars=P, sqrt=hy.sqrt) -> RollingDynamics:
     """The rolling disk's accelerations and contact force at orientation ``trig``, body angular velocity
     ``omega`` (module docstring). Vectors in G-components unless named _B/_I.
 
     slip: (s, s_dot), a prescribed horizontal velocity s of the material point at C1 and its time derivative
     (both G-components; s_dot the derivative of the vector s in the inertial frame), for the slow flow of
     :mod:`.slow_flow`: then v_G = s - Omega x r_GC1 and a_S = Psi x d + b + s_dot. Default: rolling, s = 0.
+    hold_spin: a torque tau e_z^I about the vertical joins Euler's equation, the one that keeps the spin
+    alpha_dot constant (alpha_ddot = 0; the reduced model of :mod:`.held_spin`); its power is tau e_z^I . Omega.
     pars, sqrt: the parameters by name and the square root, heyoka's by default; sympy symbols and sympy.sqrt
     give the same expressions in sympy (:mod:`tippedisk_analysis.analysis.critical_spin`)."""
     m, e, r, g = pars["m"], pars["e"], pars["r"], pars["gravity"]
@@ -96,8 +99,15 @@ def rolling_dynamics(trig: Trig, omega, slip=None, *, pars=P, sqrt=hy.sqrt) -> R
     # M = Theta_S + m (|d|^2 I - d d^T): block diagonal
     m00, m01, m11 = t00 + m * d[1] * d[1], t01 - m * d[0] * d[1], t11 + m * d[0] * d[0]
     det = m00 * m11 - m01 * m01
-    psi_G = [(m11 * rhs[0] - m01 * rhs[1]) / det, (m00 * rhs[1] - m01 * rhs[0]) / det,
-             rhs[2] / (C + m * (d[0] * d[0] + d[1] * d[1]))]
+    m22 = C + m * (d[0] * d[0] + d[1] * d[1])
+    psi_G = [(m11 * rhs[0] - m01 * rhs[1]) / det, (m00 * rhs[1] - m01 * rhs[0]) / det, rhs[2] / m22]
+    torque = 0.0 * sb
+    if hold_spin:
+        # alpha_ddot sb = Psi_G,y + (gamma_dot - alpha_dot cos beta) beta_dot (d/dt of W_y = alpha_dot sb, with
+        # dW/dt = Psi_G + gamma_dot e_z x W); the torque adds tau M^-1 e_z^I to Psi_G: choose tau for alpha_ddot = 0
+        response = [-m01 * sb / det, m00 * sb / det, cb / m22]
+        torque = -(psi_G[1] + (gamma_d - alpha_d * cb) * W[0]) / response[1]
+        psi_G = [p + torque * u for p, u in zip(psi_G, response)]
     F = [m * (u + v) for u, v in zip(cross(psi_G, d), load)]
     lambda_N = dot(F, ez_I)
     lambda_T_G = [F[i] - lambda_N * ez_I[i] for i in range(3)]
@@ -114,6 +124,7 @@ def rolling_dynamics(trig: Trig, omega, slip=None, *, pars=P, sqrt=hy.sqrt) -> R
         lambda_T_G=lambda_T_G,
         cone_margin=pars["mu"] * lambda_N - sqrt(dot(lambda_T_G, lambda_T_G)),
         friction_power=0.0 * sb if slip is None else dot(lambda_T_G, slip[0]),
+        holding_torque=torque,
         energies={"E_kin": 0.5 * m * dot(v_S, v_S) + 0.5 * dot(omega, L_B), "E_pot": m * g * z_S},
         z_S=z_S,
         g_N1=0.0 * sb,  # r sin(beta) - r sin(beta): closed by construction

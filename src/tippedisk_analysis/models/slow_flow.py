@@ -69,26 +69,41 @@ def manifold_slip(dyn: rolling.RollingDynamics, eps, *, mu=P["mu"], sqrt=hy.sqrt
 
 @dataclass(frozen=True)
 class SlowFlow:
-    rhs: list  # d/dt (beta, gamma, omega_x, omega_y, omega_z) (S1-S3)
+    rhs: list  # d/dt of the state (S1-S3): (beta, gamma, omega_x, omega_y, omega_z), or held_spin's
     rolling: rolling.RollingDynamics  # the rolling forces at the state (eps = 0)
     slow: rolling.RollingDynamics  # the slow flow's kinematics and forces, with the slip s
     slip: list  # s = eps h, G-components [m/s]
 
 
 def slow_dynamics(variables, trig: Trig, *, pars=P, sqrt=hy.sqrt, diff=hy.diff,
-                  smoothing=FORCE_SMOOTHING) -> SlowFlow:
+                  smoothing=FORCE_SMOOTHING, hold_spin=False) -> SlowFlow:
     """The slow flow (S1-S3) at the reduced state ``variables`` with orientation ``trig``. heyoka's
-    expressions by default; sympy symbols with sympy.sqrt and sympy.diff give the same in sympy."""
-    _beta, _gamma, *omega = variables
-    roll = rolling.rolling_dynamics(trig, omega, pars=pars, sqrt=sqrt)
-    f_roll = [roll.euler_rates[1], roll.euler_rates[2], *roll.psi]
+    expressions by default; sympy symbols with sympy.sqrt and sympy.diff give the same in sympy.
+    hold_spin: the held-spin model of :mod:`.held_spin`: ``variables`` are (beta, gamma, beta_dot, gamma_dot)
+    and the spin alpha_dot = pars["spin"] is held by a torque about the vertical (rhs: their rates)."""
+    if hold_spin:
+        _beta, _gamma, beta_d, gamma_d = variables
+        spin = pars["spin"]
+        omega = trig.B_from_G([beta_d, spin * trig.sb, spin * trig.cb + gamma_d])
+    else:
+        _beta, _gamma, *omega = variables
+
+    def rates(dyn: rolling.RollingDynamics) -> list:
+        if not hold_spin:
+            return [dyn.euler_rates[1], dyn.euler_rates[2], *dyn.psi]
+        # dW/dt = Psi_G + gamma_dot e_z x W with W = (beta_dot, spin sb, spin cb + gamma_dot), alpha_ddot = 0
+        psi_G = trig.G_from_B(dyn.psi)
+        return [beta_d, gamma_d, psi_G[0] - gamma_d * spin * trig.sb, psi_G[2] + spin * trig.sb * beta_d]
+
+    roll = rolling.rolling_dynamics(trig, omega, hold_spin=hold_spin, pars=pars, sqrt=sqrt)
+    f_roll = rates(roll)
     s = manifold_slip(roll, pars["eps"], mu=pars["mu"], sqrt=sqrt, smoothing=smoothing)
     W = trig.G_from_B(omega)
     w_G = [W[0], W[1], trig.cb * W[1] / trig.sb]  # the frame G (rolling.rolling_dynamics)
     turn = [w_G[1] * s[2] - w_G[2] * s[1], w_G[2] * s[0] - w_G[0] * s[2], w_G[0] * s[1] - w_G[1] * s[0]]
     s_dot = [sum(diff(s_i, x) * f for x, f in zip(variables, f_roll)) + turn[i] for i, s_i in enumerate(s)]
-    slow = rolling.rolling_dynamics(trig, omega, slip=(s, s_dot), pars=pars, sqrt=sqrt)
-    return SlowFlow([slow.euler_rates[1], slow.euler_rates[2], *slow.psi], roll, slow, s)
+    slow = rolling.rolling_dynamics(trig, omega, slip=(s, s_dot), hold_spin=hold_spin, pars=pars, sqrt=sqrt)
+    return SlowFlow(rates(slow), roll, slow, s)
 
 
 @functools.lru_cache(maxsize=None)

@@ -1,0 +1,98 @@
+"""The held-spin model (models/held_spin.py): the slow flow with the spin about the vertical held by a torque.
+Checked by its power balance (exact at eps = 0, second order in eps as the slow flow's), by its linearisation
+against the closed form of analysis/critical_spin.py (another formulation: the slow flow in body rates), by
+its Hopf points against omega_c and the precession onset, and by what it does from Table 3's start."""
+
+import copy
+import math
+
+import heyoka as hy
+import numpy as np
+import pytest
+
+from tippedisk_analysis import dynamics as dy
+from tippedisk_analysis.analysis import critical_spin, inversion
+from tippedisk_analysis.models import held_spin
+from tippedisk_analysis.errors import ParameterError
+from tippedisk_analysis.parameters import Disk
+
+START = np.array([0.5 * math.pi, -0.5 * math.pi + 0.3, 1.0, -2.0])  # tilted, turned, rates: well off the spins
+
+
+def balance_error(spin, eps, t_end=1.0):
+    """max |E(t) - E(0) - W(t)| over a run, W the work of friction and of the holding torque (quadratures in the
+    integrator), and the total work |W(t_end)|."""
+    system = held_spin.system()
+    pars = system.with_pars(spin=spin, eps=eps)
+    work = hy.make_vars("work")
+    power = system.observables["friction_power"][0] + system.observables["holding_power"][0]
+    ta = copy.deepcopy(system.taylor(1e-14, extra=[(work, power)]))
+    ta.state[:] = [*START, 0.0]
+    ta.pars[:] = pars[: len(ta.pars)]
+    xs = ta.propagate_grid(np.linspace(0.0, t_end, 101))[-1]
+    energy = system.observe(xs[:, :4].T.copy(), pars)["E_tot"]
+    assert system.observe(xs[:, :4].T.copy(), pars)["lambda_N"].min() > 0  # a valid contact throughout
+    return np.abs(energy - energy[0] - xs[:, 4]).max(), abs(xs[-1, 4])
+
+
+def test_the_holding_torque_supplies_exactly_the_energy_rolling_gains():
+    """At eps = 0 (rolling) the only work is the holding torque's: E(t) - E(0) = W(t) to rounding. A wrong
+    torque or a wrong conversion of the angular acceleration to (beta_ddot, gamma_ddot) breaks this."""
+    error, work = balance_error(32.0, 0.0)
+    assert work > 5e-4 and error < 1e-10 * work
+
+
+def test_with_friction_the_power_balance_holds_to_second_order_in_eps():
+    """The slow flow's balance holds to O(eps^2) (first-order reduction); the held model's must do the same."""
+    errors = [balance_error(32.0, eps)[0] for eps in (2e-3, 1e-3, 5e-4)]
+    ratios = np.array(errors[:-1]) / np.array(errors[1:])
+    assert np.all((ratios > 3.5) & (ratios < 4.5)), (errors, ratios)
+
+
+@pytest.mark.parametrize("disk", [Disk(), Disk(e=0.0035), Disk(r=0.05)], ids=["tables", "e3.5mm", "r50mm"])
+def test_the_linearisation_at_the_inverted_spin_is_the_closed_forms(disk):
+    """The Jacobian on (beta, gamma, beta_dot, gamma_dot) has the eigenvalues of K0 + eps K1 (slow flow, body
+    rates): the holding torque does not enter at first order."""
+    system = held_spin.system()
+    for spin in (20.0, 30.0, 45.0):
+        for eps in (0.1, 0.01):
+            pars = system.with_pars(spin=spin, eps=eps, m=disk.m, e=disk.e, r=disk.r, A=disk.A, B=disk.B, C=disk.C)
+            state = held_spin.spin_state("inverted")
+            assert np.abs(system.f(state, pars)).max() < 1e-10
+            K0, K1 = critical_spin.spin_matrices(spin, disk.m, disk.e, disk.r, disk.A, disk.B, disk.C, 9.81, 0.3)
+            closed = np.sort_complex(np.linalg.eigvals(np.array(K0, float) + eps * np.array(K1, float)))
+            held = np.sort_complex(np.linalg.eigvals(system.jacobian(state, pars)))
+            assert np.abs(held - closed).max() < 1e-9 * np.abs(closed).max()
+
+
+def hopf_points(eps):
+    system = held_spin.system()
+    branch = dy.equilibrium_branch(system, held_spin.spin_state("inverted"), "spin", bounds=(20.0, 40.0),
+                                   pars=system.with_pars(spin=20.0, eps=eps), ds_max=1.0)
+    labels = [str(label) for label in branch.special_label.values]
+    assert labels == ["HOPF1", "HOPF2"] and branch.attrs["status"] == "completed"
+    return branch.spin.values[branch.special_index.values]
+
+
+def test_the_hopf_points_of_the_inverted_spin_tend_to_the_closed_form_as_eps_squared():
+    """The precession turns growing at HOPF1, the nutation turns damped at HOPF2 = omega_c (C4)."""
+    closed = critical_spin.omega_critical()
+    limits = np.array([closed.omega_precession, closed.omega_critical])
+    errors = np.array([np.abs(hopf_points(eps) - limits) for eps in (0.02, 0.01, 0.005)])
+    ratios = errors[:-1] / errors[1:]
+    assert np.all((ratios > 3.5) & (ratios < 4.5)), (errors, ratios)
+    assert errors[-1].max() < 5e-3
+
+
+def test_from_table_3_the_held_disk_inverts_above_its_threshold_and_rolls_off_below():
+    """eps = 0.01 m/s: held at 32.5 rad/s the start inverts; held at 30.0 rad/s (below omega_c) S never rises
+    and the disk lifts off (docs/inversion.md: the held threshold lies near 31.5 rad/s)."""
+    setup = inversion.with_eps(None, 0.01)
+    above = inversion.outcome(32.5, model="held", setup=setup)
+    below = inversion.outcome(30.0, model="held", setup=setup)
+    assert above.status == "inverted" and below.status == "lift_off", (above, below)
+
+
+def test_an_unknown_spin_is_refused_by_name():
+    with pytest.raises(ParameterError, match="unknown spin 'upright'; choose one of inverted, lower"):
+        held_spin.spin_state("upright")
