@@ -127,10 +127,13 @@ def check_start(setup: Setup, gamma0: float) -> None:
                              "(Table 3: gamma0 = -pi/2 + 0.1)")
 
 
-def parameters(model: str, setup: Setup, spin: float = held_spin.DEFAULT_SPIN) -> np.ndarray:
-    """The model's runtime parameters for ``setup`` (eps from its friction; ``spin`` [rad/s]: the held model's)."""
+def parameters(model: str, setup: Setup, spin: float | None = None) -> np.ndarray:
+    """The model's runtime parameters for ``setup`` (eps from its friction; ``spin`` [rad/s]: the held spin, which
+    the held model needs)."""
     _check_model(model)
-    values = {**dict(zip(ode.PARAMETER_NAMES, ode.parameter_vector(setup))), "spin": float(spin)}
+    if model == "held" and spin is None:
+        raise ParameterError("the held model needs the spin it holds: give spin in rad/s")
+    values = dict(zip(ode.PARAMETER_NAMES, ode.parameter_vector(setup)), spin=spin)
     return np.array([values[name] for name in system(model).parameter_names])
 
 
@@ -193,7 +196,9 @@ def spin_threshold(*, model: str = "smooth", setup: Setup | None = None, gamma0:
     if not pairs:
         what = "inverts" if decided[0][1] else "does not invert"
         return _threshold(math.nan, math.nan, math.nan, "no_crossing", f"every decided spin in [{low:g}, {high:g}] "
-                          f"rad/s {what}; widen the bracket" + note, (), runs)
+                          f"rad/s {what}; widen the bracket"
+                          + (" or scan more finely (runs that decided nothing may hide a crossing)" if bad else "")
+                          + note, (), runs)
     crossings = []
     for a, b, below in pairs:
         while b - a > xtol:
@@ -255,7 +260,8 @@ def threshold_dataset(cases: dict) -> xr.Dataset:
     spin_attrs = {"units": "rad s-1", "padding_value": PADDING, "comment": "-1: no threshold (status)"}
     ds = xr.Dataset(
         {"spin_threshold": ("case", column(lambda m, s, th: found(th, th.spin)),
-                            {**spin_attrs, "long_name": "initial spin above which the start inverts (first crossing)"}),
+                            {**spin_attrs, "long_name": "initial spin above which the start inverts (first crossing)",
+                             "comment": "-1: no threshold (status); model held: the held spin"}),
          "spin_low": ("case", column(lambda m, s, th: found(th, th.low)),
                       {**spin_attrs, "long_name": "highest spin run that does not invert"}),
          "spin_high": ("case", column(lambda m, s, th: found(th, th.high)),
@@ -295,7 +301,8 @@ def threshold_dataset(cases: dict) -> xr.Dataset:
     config = {"criterion": f"z_S > r + {INVERSION_HEIGHT:g} e within {HORIZON:g} s at eps >= {HORIZON_EPS:g} m/s, "
                            f"{HORIZON:g} * {HORIZON_EPS:g} / eps s below", "tol": TOL,
               "cases": {k: {"model": cases[k][0], "message": cases[k][2].message} for k in labels}}
+    spin = "held" if all(cases[k][0] == "held" for k in labels) else "initial"
     ds.attrs = make_attrs("inversion_threshold", config, status,
-                          f"{len(labels)} thresholds of the initial spin ({', '.join(sorted(statuses))})",
-                          title="Initial spin above which the Table 3 start inverts")
+                          f"{len(labels)} thresholds of the {spin} spin ({', '.join(sorted(statuses))})",
+                          title=f"{spin.capitalize()} spin above which the Table 3 start inverts")
     return ds
