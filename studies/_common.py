@@ -65,6 +65,14 @@ def save(fig, path: Path) -> None:
     print(f"figure: {path}")
 
 
+def finish(fig, axes, path: Path, fontsize: float = 8) -> None:
+    """A legend and a light grid on each of ``axes``, then :func:`save`."""
+    for a in axes:
+        a.legend(fontsize=fontsize)
+        a.grid(alpha=0.3)
+    save(fig, path)
+
+
 # ----------------------------------------------------------------------------- measures (Sect. 6 statements)
 
 

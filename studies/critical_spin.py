@@ -18,7 +18,7 @@ from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
-from tippedisk_studies._common import prepare, save
+from tippedisk_studies._common import finish, prepare
 
 import tippedisk_analysis as td
 from tippedisk_analysis import dynamics as dy
@@ -107,10 +107,7 @@ def figure(ds, grid, path: Path) -> None:
     ax[3].plot(span, span, "k:", label="full model = prediction")
     ax[3].set(xlabel="predicted threshold (C5) [rad/s]", ylabel="ODE Model 1 threshold [rad/s]",
               title="every disk and eps: the prediction is a lower bound")
-    for a in (ax[0], ax[1], ax[3]):
-        a.legend(fontsize=8)
-        a.grid(alpha=0.3)
-    save(fig, path)
+    finish(fig, (ax[0], ax[1], ax[3]), path)
 
 
 def full_model_rate(Omega, eps):
@@ -177,10 +174,7 @@ def mechanism_figure(threshold: float, curves: dict, path: Path) -> None:
     ax[2].axvline(inversion.INVERSION_HEIGHT, color="grey", ls="--", label="criterion z_S = r + 0.8 e")
     ax[2].set(xlabel="(z_S - r) / e", ylabel=r"$\dot\alpha$ [rad/s]", xlim=(-1.05, 1.05), ylim=(20, 45),
               title=r"ODE Model 1, $\varepsilon$ = 0.1 m/s, either side of the threshold")
-    for a in ax:
-        a.legend(fontsize=8)
-        a.grid(alpha=0.3)
-    save(fig, path)
+    finish(fig, ax, path)
 
 
 def main(output_dir: str = "output", quick: bool = False) -> Path:
