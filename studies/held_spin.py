@@ -1,0 +1,159 @@
+"""The reduced model with the spin held (models/held_spin.py): its spins' bifurcations in the held spin, and
+what Table 3's start does at each held spin (docs/inversion.md, "A reduced model: the spin held").
+
+    tippedisk study held_spin [--output-dir DIR] [--quick]
+
+Writes held_spin_branch.nc (kind continuation: the inverted spin continued in the held spin at eps = 0.005 m/s,
+with its eigenvalues and the Hopf points HOPF1, the precession turning growing, and HOPF2, the nutation turning
+damped), held_spin_thresholds.nc (kind inversion_threshold: the held spin above which Table 3's start inverts, at
+eps = 0.01 and 0.005 m/s, with every run of the search), held_spin_hopf2_{e,r,mu}.nc (kind continuation: HOPF2,
+the critical spin, continued in (spin, e), (spin, r) and (spin, mu), with the Bogdanov-Takens point where the
+nutation's frequency vanishes), held_spin.png (the real parts along the branch against the closed form (C3), the
+runs' outcomes and times over the held spin, two runs either side of the threshold) and held_spin_curves.png
+(the three curves against the closed form's omega_c). About 3 min.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import sys
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+from tippedisk_studies._common import finish, prepare
+
+import tippedisk_analysis as td
+from tippedisk_analysis import dynamics as dy
+from tippedisk_analysis.analysis import critical_spin as cs
+from tippedisk_analysis.analysis import inversion
+from tippedisk_analysis.models import held_spin
+
+BRANCH_EPS = 0.005  # m/s
+THRESHOLD_EPS = (0.01, 0.005)  # m/s
+BRACKET = (29.0, 33.0)  # rad/s, the held spin
+SPINS = (15.0, 45.0)  # rad/s, the branch
+CURVES = {"e": ((0.5e-3, 6e-3), 1e-3), "r": ((0.03, 0.07), 0.01), "mu": ((0.05, 1.0), 0.1)}  # bounds, scale
+STATUS_STYLE = {"inverted": ("o", "C2"), "cone": ("s", "C1"), "lift_off": ("x", "C3"), "horizon": ("^", "C0"),
+                "fell": ("v", "C4"), "nonfinite": ("*", "k")}
+RUN_NAMES = {flag: name for name, flag in inversion.RUN_FLAGS.items()}
+
+
+def branch(eps: float = BRANCH_EPS):
+    """The inverted spin of the held model continued in the held spin over SPINS."""
+    system = held_spin.system()
+    return dy.equilibrium_branch(system, held_spin.spin_state("inverted"), "spin", bounds=SPINS,
+                                 pars=system.with_pars(spin=SPINS[0], eps=eps), ds_max=0.5)
+
+
+def curves(br, quick: bool) -> dict:
+    """HOPF2 of ``br`` (the nutation turning damped: the held model's critical spin) continued in the spin and each
+    of e, r, mu (A, B, C about G kept), within CURVES' bounds (narrower with ``quick``)."""
+    out = {}
+    for name, ((low, high), scale) in CURVES.items():
+        value = float(br[name].values[0])
+        if quick:
+            low, high = value - 0.1 * (value - low), value + 0.1 * (high - value)
+        out[name] = dy.special_point_curve(held_spin.system(), br, "HOPF2", ("spin", name),
+                                           bounds={name: (low, high), "spin": SPINS}, scales={name: scale, "spin": 1.0})
+    return out
+
+
+def closed_form(name: str, values) -> np.ndarray:
+    """omega_c (C4) of the Table 1-2 disk with ``name`` (e, r: A, B, C about G kept; mu) at ``values``."""
+    disk = td.Disk()
+    if name == "mu":
+        return np.array([cs.omega_critical(disk, mu=float(v)).omega_critical for v in values])
+    return np.array([cs.omega_critical(dataclasses.replace(disk, **{name: float(v)})).omega_critical for v in values])
+
+
+def curves_figure(found: dict, path: Path) -> None:
+    fig, ax = plt.subplots(1, 3, figsize=(17, 4.8), constrained_layout=True)
+    units = {"e": ("eccentricity e [mm]", 1e3), "r": ("radius r [mm]", 1e3), "mu": (r"friction coefficient $\mu$", 1.0)}
+    for a, (name, curve) in zip(ax, found.items()):
+        label, scale = units[name]
+        a.plot(curve[name].values * scale, curve.spin.values, "C0",
+               label=f"HOPF2 of the held model, eps {BRANCH_EPS:g}")
+        marks = np.linspace(curve[name].values.min(), curve[name].values.max(), 12)
+        a.plot(marks * scale, closed_form(name, marks), "ko", ms=4, mfc="none", label=r"closed form $\omega_c$ (C4)")
+        for i, lab in zip(curve.special_index.values, curve.special_label.values):
+            a.plot(curve[name].values[i] * scale, curve.spin.values[i], "kD")
+            a.annotate(str(lab), (curve[name].values[i] * scale, curve.spin.values[i]), textcoords="offset points",
+                       xytext=(5, -10), fontsize=8)
+        a.set(xlabel=label, ylabel="critical spin [rad/s]", title=f"the critical spin over {name}")
+    finish(fig, ax, path)
+
+
+def figure(br, ds, path: Path) -> None:
+    fig, ax = plt.subplots(1, 3, figsize=(17, 4.8), constrained_layout=True)
+    found = cs.omega_critical()
+    eps = float(br.eps.values[0])
+    order = np.argsort(np.abs(br.eig_imag.values), axis=1)  # per point: nutation pair first, then precession
+    real = np.take_along_axis(br.eig_real.values, order, axis=1)
+    ax[0].plot(br.spin.values, real[:, 0] / eps, "C0", label="nutation, held model")
+    ax[0].plot(br.spin.values, real[:, 2] / eps, "C1", label="precession, held model")
+    grid = np.linspace(*SPINS, 200)
+    lines = np.array([[cs.rates(w)[k] for k in ("rate_nutation", "rate_precession")] for w in grid])
+    ax[0].plot(grid, lines[:, 0], "k:", lw=1, label="closed form (C3)")
+    ax[0].plot(grid, lines[:, 1], "k:", lw=1)
+    for i, label in zip(br.special_index.values, br.special_label.values):
+        ax[0].plot(br.spin.values[i], 0.0, "kD", ms=5)
+        ax[0].annotate(str(label), (br.spin.values[i], 0.0), textcoords="offset points", xytext=(4, 6), fontsize=8)
+    ax[0].axhline(0.0, color="k", lw=0.8)
+    ax[0].set(xlabel="held spin [rad/s]", ylabel=r"Re $\lambda$ / $\varepsilon$ [1/m]", ylim=(-60, 40),
+              title=rf"inverted spin, held, $\varepsilon$ = {eps:g} m/s")
+    for i, eps_i in enumerate(ds.eps.values):
+        n = int((ds.run_outcome.values[i] >= 0).sum())
+        spins, times = ds.run_spin.values[i, :n], ds.run_time.values[i, :n]
+        outcomes = [RUN_NAMES[int(k)] for k in ds.run_outcome.values[i, :n]]
+        for status, (marker, color) in STATUS_STYLE.items():
+            pick = np.array([o == status for o in outcomes])
+            if pick.any():
+                ax[1].semilogy(spins[pick], times[pick], marker, color=color, mfc="none" if i else color,
+                               label=f"{status}, eps {eps_i:g}")
+    ax[1].axvline(found.omega_critical, color="k", ls=":", label=rf"$\omega_c$ = {found.omega_critical:.2f}")
+    ax[1].set(xlabel="held spin [rad/s]", ylabel="time the run ended [s]",
+              title="Table 3's start at a held spin: how each run ends")
+    system, setup = inversion.system("held"), inversion.with_eps(None, BRANCH_EPS)
+    flow = dy.Flow(system)
+    disk = td.Disk()
+    threshold = float(ds.spin_threshold.values[list(ds.eps.values).index(BRANCH_EPS)])
+    for spin, color in ((31.0, "C3"), (threshold + 0.1, "C2")):
+        run = inversion.outcome(spin, model="held", setup=setup)
+        times = np.linspace(0.0, run.time, 6001)
+        pars = inversion.parameters("held", setup, spin)
+        states = flow.trajectory(inversion.start_state("held", spin, setup, td.InitialState().gamma), times, pars)
+        z_S = system.observe(states.T, pars)["z_S"]
+        ax[2].plot(times, (z_S - disk.r) / disk.e, color=color, lw=0.4,
+                   label=f"held at {spin:.2f} rad/s: {run.status} at {run.time:.1f} s")
+    ax[2].axhline(inversion.INVERSION_HEIGHT, color="grey", ls="--", label="criterion z_S = r + 0.8 e")
+    ax[2].set(xlabel="t [s]", ylabel="(z_S - r) / e", ylim=(-3, 1.2),
+              title=rf"held model, $\varepsilon$ = {BRANCH_EPS:g} m/s, Table 3's start")
+    finish(fig, ax, path, fontsize=7)
+
+
+def main(output_dir: str = "output", quick: bool = False) -> Path:
+    out = prepare(output_dir)
+    br = branch()
+    branch_path = td.save(br, out / "held_spin_branch.nc")
+    print(f"{branch_path}: {br.attrs['message']}")
+    found = {}
+    for eps in THRESHOLD_EPS[-1:] if quick else THRESHOLD_EPS:
+        th = inversion.spin_threshold(model="held", setup=inversion.with_eps(None, eps), bracket=BRACKET,
+                                      scan=5 if quick else 17, xtol=0.05 if quick else 1e-3)
+        found[f"held spin, eps {eps:g}"] = ("held", inversion.with_eps(None, eps), th)
+        print(f"held spin, eps {eps:g}: {th.status}, {th.message}", flush=True)
+    ds = inversion.threshold_dataset(found)
+    path = td.save(ds, out / "held_spin_thresholds.nc")
+    figure(br, ds, path.with_name("held_spin.png"))
+    print(f"{path}: {ds.attrs['message']}")
+    found_curves = curves(br, quick)
+    for name, curve in found_curves.items():
+        curve_path = td.save(curve, out / f"held_spin_hopf2_{name}.nc")
+        print(f"{curve_path}: {curve.attrs['message']}")
+    curves_figure(found_curves, out / "held_spin_curves.png")
+    return path
+
+
+if __name__ == "__main__":
+    main(*sys.argv[1:2])
