@@ -4,16 +4,18 @@ against the closed form of analysis/critical_spin.py (another formulation: the s
 its Hopf points against omega_c and the precession onset, and by what it does from Table 3's start."""
 
 import copy
+import dataclasses
 import math
 
 import heyoka as hy
 import numpy as np
 import pytest
+from scipy.optimize import fsolve
 
 from tippedisk_analysis import dynamics as dy
 from tippedisk_analysis.analysis import critical_spin, inversion
-from tippedisk_analysis.models import held_spin
 from tippedisk_analysis.errors import ParameterError
+from tippedisk_analysis.models import held_spin
 from tippedisk_analysis.parameters import Disk
 
 START = np.array([0.5 * math.pi, -0.5 * math.pi + 0.3, 1.0, -2.0])  # tilted, turned, rates: well off the spins
@@ -96,3 +98,55 @@ def test_from_table_3_the_held_disk_inverts_above_its_threshold_and_rolls_off_be
 def test_an_unknown_spin_is_refused_by_name():
     with pytest.raises(ParameterError, match="unknown spin 'upright'; choose one of inverted, lower"):
         held_spin.spin_state("upright")
+
+
+def inverted_branch(eps=0.005):
+    system = held_spin.system()
+    return dy.equilibrium_branch(system, held_spin.spin_state("inverted"), "spin", bounds=(20.0, 40.0),
+                                 pars=system.with_pars(spin=20.0, eps=eps), ds_max=1.0)
+
+
+@pytest.mark.parametrize("name, bounds, scale", [("e", (2.0e-3, 3.0e-3), 1e-3), ("r", (0.042, 0.048), 0.01)])
+def test_the_critical_spin_continued_in_e_and_r_lies_on_the_closed_form(name, bounds, scale):
+    """HOPF2 continued in (spin, e) and (spin, r): another route to omega_c(e), omega_c(r) than (C4)."""
+    curve = dy.special_point_curve(held_spin.system(), inverted_branch(), "HOPF2", ("spin", name),
+                                   bounds={name: bounds, "spin": (20.0, 40.0)}, scales={name: scale, "spin": 1.0})
+    assert curve.attrs["status"] == "completed" and curve.sizes["point"] > 5
+    values = curve[name].values
+    assert values.min() < bounds[0] + 1e-6 and values.max() > bounds[1] - 1e-6  # it spans the bounds
+    for k in np.linspace(0, len(values) - 1, 5).astype(int):
+        closed = critical_spin.omega_critical(dataclasses.replace(Disk(), **{name: float(values[k])}))
+        assert abs(curve.spin.values[k] - closed.omega_critical) < 2e-4  # O(eps^2) at eps = 0.005
+
+
+@pytest.mark.slow
+def test_the_critical_spin_ends_at_a_bogdanov_takens_point_where_the_nutation_frequency_vanishes():
+    """Towards small e the curve of HOPF2 meets a double zero eigenvalue (BT): in the closed form where the
+    rolling nutation's frequency vanishes (c0 = 0 of (C1)) and its damping does (a1 = 0), solved here."""
+    curve = dy.special_point_curve(held_spin.system(), inverted_branch(), "HOPF2", ("spin", "e"),
+                                   bounds={"e": (0.7e-3, 2.5e-3), "spin": (20.0, 40.0)},
+                                   scales={"e": 1e-3, "spin": 1.0})
+    labels = [str(label) for label in curve.special_label.values]
+    assert "BT1" in labels, curve.attrs["message"]
+    i = curve.special_index.values[labels.index("BT1")]
+
+    def conditions(x):
+        disk = Disk(e=x[1] * 1e-3)
+        _c2, c0, _a3, a1 = critical_spin.coefficients(x[0], disk.m, disk.e, disk.r, disk.A, disk.B, disk.C, 9.81, 0.3)
+        return [c0 / 1e4, a1 / 1e3]
+
+    spin, e_mm = fsolve(conditions, [curve.spin.values[i], curve.e.values[i] * 1e3])
+    assert abs(curve.spin.values[i] - spin) < 3e-3 and abs(curve.e.values[i] * 1e3 - e_mm) < 3e-3
+
+
+def test_the_critical_spin_does_not_depend_on_mu():
+    """(C4) is homogeneous in the friction coefficients: HOPF2 continued in (spin, mu) stays at omega_c."""
+    curve = dy.special_point_curve(held_spin.system(), inverted_branch(), "HOPF2", ("spin", "mu"),
+                                   bounds={"mu": (0.2, 0.6), "spin": (20.0, 40.0)}, scales={"mu": 0.1, "spin": 1.0})
+    assert curve.mu.values.min() < 0.2 + 1e-6 and curve.mu.values.max() > 0.6 - 1e-6
+    assert np.abs(curve.spin.values - critical_spin.omega_critical().omega_critical).max() < 1e-4
+
+
+def test_the_held_model_needs_the_spin_it_holds():
+    with pytest.raises(ParameterError, match="the held model needs the spin it holds"):
+        inversion.parameters("held", inversion.with_eps(None, 0.01))
