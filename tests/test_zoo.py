@@ -270,6 +270,28 @@ def test_generalised_hopf_point_is_flagged_but_its_branch_is_regular():
     assert np.hypot(*po.initial_state.values[k]) == pytest.approx(0.1**0.25, rel=1e-8)
 
 
+def test_a_hopf_point_where_the_field_is_only_c1_says_so_and_its_cycles_grow_linearly():
+    """r' = r (mu - r): the field has a kink at the origin, so l1 (which assumes C^2) does not apply. The Hopf
+    point is flagged special_smooth = 0 with l1 stored 0 and a note in the message; the orbits from it are the
+    exact ones, radius mu, period 2 pi, stable."""
+    s = zoo.c1_hopf()
+    eq = dy.equilibrium_branch(s, [0.0, 0.0], "mu", bounds=(-0.1, 0.2))
+    assert list(eq.special_label.values) == ["HOPF1"] and abs(float(eq.mu[int(eq.special_index[0])])) < 1e-12
+    assert int(eq.special_smooth[0]) == 0 and float(eq.special_l1[0]) == 0.0
+    assert "not twice differentiable" in eq.attrs["message"]
+    po = dy.orbit_branch(s, eq, "HOPF1", bounds=(-0.1, 0.2), marks=(0.1,))
+    k = int(po.special_index.values[list(po.special_label.values).index("UZ1")])
+    assert float(po.period[k]) == pytest.approx(2 * math.pi, rel=1e-9)
+    assert np.hypot(*po.initial_state.values[k]) == pytest.approx(0.1, rel=1e-8)
+    assert int(po.stability[k]) == dy.STABILITY["stable"]
+
+
+def test_smooth_hopf_points_are_not_flagged():
+    for s, state in ((zoo.bautin(), [0.0, 0.0]), (zoo.generalised_hopf(), [0.0, 0.0])):
+        eq = dy.equilibrium_branch(s, state, "mu", bounds=(-0.1, 0.2), pars=s.with_pars(mu=-0.1))
+        assert list(eq.special_smooth.values) == [1], s.name
+
+
 def test_subcritical_hopf_point_and_its_unstable_orbits():
     """Bautin with mu free: the Hopf point at mu = 0 is subcritical (l1 > 0, not degenerate); its orbits exist for
     mu < 0 with radius r_u and are unstable, the branch turning at the fold of cycles mu = -1."""

@@ -38,6 +38,14 @@ def bautin(mu: float = -0.5) -> dy.System:
     return dy.System("bautin_user", [x, y], [p0 * x - y + g * x, x + p0 * y + g * y], parameters={"mu": mu})
 
 
+def c1_hopf(mu: float = -0.1) -> dy.System:
+    """Polar r' = r (mu - r), theta' = 1, r written sqrt(x^2 + y^2 + 1e-24) - 1e-12 (a user's smoothing of |x|): a
+    Hopf point at mu = 0 of a field that is C^1 but not C^2 there, with stable cycles of radius mu (linear in mu,
+    not sqrt: no first Lyapunov coefficient describes it), period 2 pi."""
+    r = hy.sqrt(x**2 + y**2 + 1e-24) - 1e-12
+    return dy.System("c1_hopf_user", [x, y], [p0 * x - y - r * x, x + p0 * y - r * y], parameters={"mu": mu})
+
+
 def generalised_hopf(mu: float = -0.1) -> dy.System:
     """r' = r (mu - r^4), theta' = 1: l1 = 0 at the Hopf point mu = 0, but not a centre: stable orbits of radius
     mu^(1/4) and period 2 pi for mu > 0."""

@@ -25,6 +25,7 @@ from .system import System
 SPECIAL_KINDS = {"bound": 0, "fold": 1, "branch_point": 2, "hopf": 3, "bogdanov_takens": 4, "zero_hopf": 5,
                  "double_hopf": 6, "bautin": 7, "cusp": 8, "line_saddle_change": 9, "line_focus_node": 10, "user": 11}
 """int8 codes of ``special_kind`` in continuation datasets (flag_values / flag_meanings)."""
+SMOOTH_FLAGS = {False: 0, True: 1, None: 2}  # special_smooth: describe's "smooth", None where it has none
 
 
 def flag_attrs(long_name: str, flags: dict) -> dict:
@@ -73,6 +74,11 @@ def special_table(br: Branch, system: System, kinds: dict = SPECIAL_KINDS) -> di
                                                          dtype=np.int8),
                                flag_attrs("l1 zero to round-off of its terms (a degenerate Hopf point)",
                                           {"no": 0, "yes": 1})),
+        "special_smooth": ("special_point", np.array([SMOOTH_FLAGS[sp.data.get("smooth")] for sp in sps],
+                                                     dtype=np.int8),
+                           flag_attrs("whether the vector field is twice differentiable at the point (no: a kink, "
+                                      "e.g. a |x| x term; l1 and the fold coefficient do not apply and are 0)",
+                                      {"no": 0, "yes": 1, "not_checked": 2})),
     }
 
 
@@ -125,7 +131,7 @@ def continuation_dataset(br: Branch, prob, info: dict | None = None, columns: di
         "special_point": index_coordinate("special_point", len(br.special_points), "special point index")})
     free = [p.name for p in prob.free]
     labels = summary([f"{sp.label} at " + ", ".join(f"{name} = {sp.u[n + j]:.8g}" for j, name in enumerate(free))
-                      + (DEGENERATE_NOTE if sp.data.get("class") == "degenerate" else "")
+                      + {"degenerate": DEGENERATE_NOTE, "not_smooth": NOT_SMOOTH_NOTE}.get(sp.data.get("class"), "")
                       for sp in br.special_points])
     what = (f"curve of {'Hopf' if prob.critical == 'hopf' else 'zero-eigenvalue'} points" if prob.critical
             else "branch of equilibria")
@@ -142,6 +148,7 @@ def continuation_dataset(br: Branch, prob, info: dict | None = None, columns: di
 
 
 DEGENERATE_NOTE = " (degenerate: l1 = 0, a generalised Hopf point or a centre)"
+NOT_SMOOTH_NOTE = " (the field is not twice differentiable there: no normal-form coefficient)"
 
 
 def summary(items: list[str], limit: int = 6) -> str:

@@ -48,6 +48,8 @@ class Parameter:
         return cls(name, scale, runtime=((system.parameter_index(name), 1.0),))
 
 
+KINK_STEPS = (1e-4, 2.5e-5)  # steps (times the state scale) of the second differences of J in _has_kink
+KINK_FLOOR = 1e-8  # a second difference below this share of |J| / scale is round-off, not a kink
 REAL_TOL = 1e-7  # relative |Im s| below which an eigenvalue counts as real: the eigenvalues of a Jordan
 # block (at a Bogdanov-Takens point) are only determined to sqrt(machine eps)
 
@@ -198,7 +200,8 @@ class EquilibriumProblem(continuation.Problem):
                 out["double_hopf"] = float(np.prod(others[i] + others[j]).real)
                 nf = self.describe("hopf", point.u)
                 if self.family is None:
-                    out["bautin"] = nf["l1"]
+                    if nf["class"] != "not_smooth":
+                        out["bautin"] = nf["l1"]
                 else:
                     out["line_saddle_change"] = nf["a"] * nf["b"]
                     out["line_focus_node"] = nf["k"] ** 2 + 4 * nf["a"] * nf["b"]
@@ -207,7 +210,8 @@ class EquilibriumProblem(continuation.Problem):
             out["zero_hopf"] = float(np.prod(others[i] + others[j]).real)
             nf = self.describe("fold_or_bp", point.u)
             if self.family is None:
-                out["cusp"] = nf["a"]
+                if nf.get("class") != "not_smooth":
+                    out["cusp"] = nf["a"]
             else:
                 out["line_saddle_change"] = nf["a"] * nf["b"]
                 out["line_focus_node"] = (nf["k"] + nf["c"]) ** 2 + 4 * nf["a"] * nf["b"]
@@ -285,8 +289,35 @@ class EquilibriumProblem(continuation.Problem):
         G_xs, Gamma = self.nonsmooth(x, pars)
         return lambda w: (G_xs @ w) * np.linalg.norm(Gamma @ w)
 
+    def _has_kink(self, x: np.ndarray, pars: np.ndarray) -> bool:
+        """Whether the field is not twice differentiable at x (a C^1 term such as |x| x, or a smoothing of one
+        far below the step): along some state coordinate the second difference of the Jacobian keeps its size
+        as the step shrinks (a jump of the second derivative), where a C^3 field's shrinks with the step."""
+        n = self.n
+
+        def jacobian(y):
+            return self.field.tensor(y, pars, 1, with_parameters=False)[:n, :n]
+
+        J0 = jacobian(x)
+        size = max(float(np.abs(J0).max()), 1.0)
+        for k, scale in enumerate(self.scale[:n]):
+            step = np.zeros(n)
+            step[k] = 1.0
+            d = [float(np.abs(jacobian(x + h * scale * step) - 2 * J0 + jacobian(x - h * scale * step)).max())
+                 / (h * scale) for h in KINK_STEPS]
+            if d[1] > KINK_FLOOR * size / scale and d[1] > 0.5 * d[0]:
+                return True
+        return False
+
     def describe(self, kind: str, u: np.ndarray) -> dict:
+        """The normal-form coefficients of special point ``kind`` at ``u`` and ``smooth``: whether the field is
+        twice differentiable there (:meth:`_has_kink`). Of an isolated equilibrium, l1 and the fold coefficient a
+        assume it: where it is not, the class is ``not_smooth`` and l1, a are 0 (not applicable)."""
         x, pars = u[: self.n], self.runtime(u)
+        smooth = not self._has_kink(x, pars)
+        return {**self._coefficients(kind, x, pars, smooth), "smooth": smooth}
+
+    def _coefficients(self, kind: str, x: np.ndarray, pars: np.ndarray, smooth: bool) -> dict:
         n = self.n
         J = self.field.tensor(x, pars, 1, with_parameters=False)[:n]
         B = self.field.tensor(x, pars, 2, with_parameters=False)[:n]
@@ -296,6 +327,9 @@ class EquilibriumProblem(continuation.Problem):
             if phi0 is not None:
                 nf = normal_forms.line_hopf(J, B, phi0, N)
                 return {"frequency": nf["frequency"], "a": nf["a"], "b": nf["b"], "k": nf["k"], "class": nf["class"]}
+            if not smooth:
+                return {"frequency": normal_forms.hopf_frequency(J), "l1": 0.0, "l1_scale": 0.0,
+                        "class": "not_smooth"}
             C = self.field.tensor(x, pars, 3, with_parameters=False)[:n]
             nf = normal_forms.first_lyapunov_coefficient(J, B, C)
             return {"frequency": nf["frequency"], "l1": nf["l1"], "l1_scale": nf["scale"],
@@ -305,6 +339,8 @@ class EquilibriumProblem(continuation.Problem):
             return {"a": nf["a"], "b": nf["b"], "c": nf["c"], "k": nf["k"], "class": nf["class"],
                     "class_negative": nf["class_negative"]}
         if kind in ("fold", "fold_or_bp"):
+            if not smooth:
+                return {"a": 0.0, "class": "not_smooth"}
             return {"a": normal_forms.fold_coefficient(J, B)["a"]}
         if kind == "bogdanov_takens":
             return {"jordan_block": int(_is_jordan_block(J[np.ix_(self.keep, self.keep)]))}

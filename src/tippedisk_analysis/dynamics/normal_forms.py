@@ -63,6 +63,11 @@ def _critical_pair(J: np.ndarray):
     return float(omega), q, p, complex(vals[k])
 
 
+def hopf_frequency(J: np.ndarray) -> float:
+    """omega of the complex pair of J nearest the imaginary axis."""
+    return _critical_pair(J)[0]
+
+
 def _real_null(M: np.ndarray, transpose: bool = False) -> np.ndarray:
     """Unit vector spanning the (numerically) one-dimensional null space of M (or of M^T)."""
     return np.linalg.svd(M.T if transpose else M)[2][-1]

@@ -29,7 +29,7 @@ from .tensors import Field
 RESERVED = frozenset({
     "point", "eig", "eig_real", "eig_imag", "stability", "n_unstable", "max_real_eig", "arclength", "residual",
     "newton_iterations", "special_point", "special_kind", "special_label", "special_index", "special_value",
-    "special_frequency", "special_l1", "special_degenerate", "special_a", "rejection", "unlocated",
+    "special_frequency", "special_l1", "special_degenerate", "special_smooth", "special_a", "rejection", "unlocated",
     "critical_product", "period", "floquet", "sample", "state", "orbit", "orbit_status", "amplitude",
     "multiplier_real", "multiplier_imag", "trivial", "time", "exponent",
     "exponents", "history", "history_time", "divergence_mean", "attractor", "outcome", "label", "crossing",
