@@ -123,6 +123,42 @@ def test_a_nearly_symmetric_disk_has_no_critical_spin_and_says_why():
     assert "real eigenvalues" in found.message
 
 
+def test_c0_is_the_quadratic_in_omega_squared_of_c6():
+    """(C6) written out against the product of the matrices' entries (characteristic), in sympy."""
+    import sympy as sp
+
+    m, e, r, A, B, C, g, mu, W = sp.symbols("m e r A B C g mu Omega", positive=True)
+    c0 = cs.coefficients(W, m, e, r, A, B, C, g, mu)[1]
+    P, Q, R = cs.stiffness_coefficients(m, e, r, A, B, C, g)
+    assert sp.expand(sp.together(c0 - (P * W**4 + Q * W**2 + R))) == 0
+
+
+@pytest.mark.parametrize("e", [0.85e-3, 0.9e-3, 1.0e-3])
+def test_below_the_balance_eccentricity_the_damped_window_ends_where_the_nutation_stops(e):
+    """With e < (A - B) / (m r) (1.124 mm for Table 2's A, B) c0 turns negative at one spin: there the nutation
+    frequency (C2) falls to zero, and above it the rolling inverted spin is a saddle (a real pair in numpy's
+    eigenvalues of K0)."""
+    disk = Disk(e=e)
+    (w_s,) = cs.saddle_spins(disk)
+    nu = [cs.rates(w_s - dw, disk)["nu_nutation"] for dw in (1e-2, 1e-4)]
+    assert nu[1] / nu[0] == pytest.approx(0.1, rel=1e-2) and nu[0] < 0.1  # nu_1 ~ sqrt(w_s - Omega) -> 0
+    K0, _ = cs.spin_matrices(**disk_args(disk, w_s + 0.1))
+    ev = np.linalg.eigvals(np.array(K0, dtype=float))
+    assert (np.abs(ev.imag) < 1e-9).sum() == 2 and ev.real.max() > 0
+    found = cs.omega_critical(disk)
+    if found.status == "completed":  # above the Bogdanov-Takens point (e = 0.8905 mm): a window
+        assert found.omega_critical < w_s and f"up to {w_s:.4f} rad/s" in found.message
+    else:
+        assert f"saddle above {w_s:.4f} rad/s" in found.message
+
+
+def test_above_the_balance_eccentricity_the_rolling_inverted_spin_never_turns_into_a_saddle():
+    disk = Disk()
+    balance = (disk.A - disk.B) / (disk.m * disk.r)
+    assert cs.saddle_spins(Disk(e=0.99 * balance)) and not cs.saddle_spins(Disk(e=1.01 * balance))
+    assert cs.saddle_spins(disk) == () and cs.omega_critical(disk).message.endswith("damped above 30.2325 rad/s")
+
+
 def test_threshold_is_the_energy_of_the_inverted_spin():
     """(C5): at the predicted initial spin the start's rolling energy equals the inverted spin's at omega_c,
     E = A omega_c^2 / 2 + m g (r + e) (written out here, not from the code)."""

@@ -25,6 +25,14 @@ a1 and a3 are both proportional to 1/mu and (C4) is homogeneous in them: omega_c
 and g only, not on mu or eps. The other pair (the precession, nu_2) grows above omega_c: the inverted spin
 itself is never asymptotically stable; the disk ends on a torus around it (docs/rolling.md).
 
+The nutation is damped above omega_c only while it oscillates. c0 = nu_1^2 nu_2^2 is a quadratic in Omega^2,
+
+    c0 = P Omega^4 + Q Omega^2 + R,   P = -(C_C - A)(A - B - m r e) / (B_C C_C)                   (C6)
+
+(:func:`stiffness_coefficients`), and where it turns negative nu_1 has fallen to zero: the rolling inverted spin
+turns into a saddle and two spins with the disk turned in its own plane branch off (a pitchfork). R > 0, so
+for e < (A - B) / (m r) (P < 0) this happens at one spin, :func:`saddle_spins`, which ends the damped window.
+
 From omega_c, the initial spin a start needs (C5, :func:`initial_spin_threshold`): the disk reaches the
 inverted spin only with an energy E_spin(omega_c) = A omega_c^2 / 2 + m g (r + e) (rolling energy of
 :mod:`tippedisk_analysis.models.rolling`), so the start's rolling energy must be at least that. Friction
@@ -54,9 +62,9 @@ from ..results import make_attrs
 from . import inversion
 from .rolling import spin_state
 
-__all__ = ["spin_matrices", "characteristic", "coefficients", "rates", "first_order_pairs", "CriticalSpin",
-           "omega_critical", "initial_spin_threshold", "prediction_map",
-           "derive", "check_against_jacobian"]
+__all__ = ["spin_matrices", "characteristic", "coefficients", "rates", "first_order_pairs",
+           "stiffness_coefficients", "saddle_spins", "CriticalSpin", "omega_critical", "initial_spin_threshold",
+           "prediction_map", "derive", "check_against_jacobian"]
 
 SCAN = (1.0, 400.0, 800)  # rad/s: omega_c is looked for on this grid of Omega (first growing -> damped change)
 
@@ -110,6 +118,28 @@ def coefficients(Omega, m, e, r, A, B, C, g, mu):
     return characteristic(*spin_matrices(Omega, m, e, r, A, B, C, g, mu))
 
 
+def stiffness_coefficients(m, e, r, A, B, C, g):
+    """(P, Q, R) of the rolling coefficient c0 = P Omega^4 + Q Omega^2 + R of (C1) at the inverted spin (C6).
+    Arithmetic only, as :func:`spin_matrices` (a test checks the identity with :func:`coefficients` in sympy)."""
+    d = r + e
+    B_C, C_C = B + m * r * (r + 2 * e), C + m * r * (r + 2 * e)
+    P = -(C_C - A) * (A - B - m * r * e) / (B_C * C_C)
+    Q = m * g * (e * (C_C - A - m * r * d) - d * (A - B_C) - m * d * r**2) / (B_C * C_C)
+    R = m**2 * d * e * g**2 / (B_C * C_C)
+    return P, Q, R
+
+
+def saddle_spins(disk: Disk | None = None, gravity: float = 9.81) -> tuple[float, ...]:
+    """The spins [rad/s], ascending, at which c0 of (C1) changes sign (C6): where it is negative the rolling
+    inverted spin is a saddle (its nutation is a real pair), and at each such spin a pitchfork of spins turned
+    in the disk's plane branches off. Empty when c0 > 0 at every spin, as for the Table 1-2 disk."""
+    disk = Disk() if disk is None else disk
+    P, Q, R = stiffness_coefficients(disk.m, disk.e, disk.r, disk.A, disk.B, disk.C, gravity)
+    squares = np.roots([P, Q, R]) if P != 0 else np.array([-R / Q]) if Q != 0 else np.array([])
+    real = [float(w2.real) for w2 in squares if abs(w2.imag) <= 1e-12 * abs(w2) and w2.real > 0]
+    return tuple(sorted(math.sqrt(w2) for w2 in real))
+
+
 def _values(disk: Disk, gravity: float, mu: float) -> dict:
     return dict(m=disk.m, e=disk.e, r=disk.r, A=disk.A, B=disk.B, C=disk.C, g=gravity, mu=mu)
 
@@ -138,14 +168,17 @@ def first_order_pairs(c2, c0, a3, a1) -> tuple:
 @dataclass(frozen=True)
 class CriticalSpin:
     """omega_c [rad/s] (C4) of a disk, with the nutation's frequency and the precession's rate there (C3, per
-    eps), the spin above which the precession grows (``omega_precession``, NaN if it does not turn on SCAN) and
-    ``status``: completed; no_crossing (the nutation does not turn from growing to damped on SCAN) or
-    not_elliptic (the rolling inverted spin is a saddle at every Omega on SCAN), both with omega_c NaN."""
+    eps), the spin above which the precession grows (``omega_precession``, NaN if it does not turn on SCAN), the
+    spins where the rolling inverted spin turns into a saddle or back (``saddle_spins``, (C6): the damped window
+    above omega_c ends at the next one) and ``status``: completed; no_crossing (the nutation does not turn from
+    growing to damped on SCAN) or not_elliptic (the rolling inverted spin is a saddle at every Omega on SCAN),
+    both with omega_c NaN."""
 
     omega_critical: float
     nu_nutation: float  # rad/s, the nutation frequency at omega_c
     rate_precession: float  # 1/m: Re lambda / eps of the precession at omega_c (> 0: it grows)
     omega_precession: float  # rad/s: the precession pair turns from damped to growing there
+    saddle_spins: tuple  # rad/s: c0 of (C1) changes sign there (C6)
     status: str
     message: str
 
@@ -175,19 +208,26 @@ def omega_critical(disk: Disk | None = None, gravity: float = 9.81, mu: float = 
     nutation = np.array([rate("rate_nutation")(w) for w in grid])
     precession = np.array([rate("rate_precession")(w) for w in grid])
     w_p = _first_turn(rate("rate_precession"), grid, precession, growing_to_damped=False)
+    saddles = saddle_spins(disk, gravity)
     span = f"{SCAN[0]:g}-{SCAN[1]:g} rad/s"
     nan = float("nan")
     if not np.isfinite(nutation).any():
-        return CriticalSpin(nan, nan, nan, nan, "not_elliptic",
+        return CriticalSpin(nan, nan, nan, nan, saddles, "not_elliptic",
                             f"the rolling inverted spin has real eigenvalues at every Omega on {span}: no nutation "
                             "to damp, so the closed form gives no critical spin for this disk")
     w = _first_turn(rate("rate_nutation"), grid, nutation, growing_to_damped=True)
     if math.isnan(w):
-        return CriticalSpin(nan, nan, nan, w_p, "no_crossing",
-                            f"the nutation of the inverted spin does not turn from growing to damped on {span}")
+        where = {1: f"above {saddles[0]:.4f} rad/s", 2: f"between {saddles[0]:.4f} and {saddles[-1]:.4f} rad/s"}
+        saddle = f"; it is a saddle {where[len(saddles)]} (c0 < 0, (C6))" if saddles else ""
+        return CriticalSpin(nan, nan, nan, w_p, saddles, "no_crossing",
+                            f"the nutation of the inverted spin does not turn from growing to damped on {span}"
+                            + saddle)
     at = rates(w, disk, gravity, mu)
-    return CriticalSpin(w, at["nu_nutation"], at["rate_precession"], w_p, "completed",
-                        f"the nutation of the inverted spin is damped above {w:.4f} rad/s")
+    above = [s for s in saddles if s > w]
+    window = (f"from {w:.4f} up to {above[0]:.4f} rad/s, where the rolling inverted spin turns into a saddle "
+              "(c0 = 0, (C6))" if above else f"above {w:.4f} rad/s")
+    return CriticalSpin(w, at["nu_nutation"], at["rate_precession"], w_p, saddles, "completed",
+                        f"the nutation of the inverted spin is damped {window}")
 
 
 def initial_spin_threshold(omega_c: float, setup: Setup | None = None, gamma0: float | None = None) -> float:

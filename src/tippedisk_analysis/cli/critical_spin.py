@@ -40,7 +40,8 @@ def critical_spin(args) -> int:
     inversion.check_start(setup, gamma0)  # before any work
     found = cs.omega_critical(setup.disk, setup.gravity, setup.friction.mu)
     out = {"omega_critical": None, "initial_spin_threshold": None, "status": found.status, "message": found.message,
-           "gamma0": gamma0, "mu": setup.friction.mu, "eps": setup.friction.eps}
+           "saddle_spins": list(found.saddle_spins), "gamma0": gamma0, "mu": setup.friction.mu,
+           "eps": setup.friction.eps}
     if found.status == "completed":
         out["omega_critical"] = found.omega_critical
         out["initial_spin_threshold"] = cs.initial_spin_threshold(found.omega_critical, setup, gamma0)
