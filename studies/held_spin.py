@@ -8,9 +8,11 @@ with its eigenvalues and the Hopf points HOPF1, the precession turning growing, 
 damped), held_spin_thresholds.nc (kind inversion_threshold: the held spin above which Table 3's start inverts, at
 eps = 0.01 and 0.005 m/s, with every run of the search), held_spin_hopf2_{e,r,mu}.nc (kind continuation: HOPF2,
 the critical spin, continued in (spin, e), (spin, r) and (spin, mu), with the Bogdanov-Takens point where the
-nutation's frequency vanishes), held_spin.png (the real parts along the branch against the closed form (C3), the
-runs' outcomes and times over the held spin, two runs either side of the threshold) and held_spin_curves.png
-(the three curves against the closed form's omega_c). About 3 min.
+nutation's frequency vanishes), held_spin_bp1_e.nc (kind continuation: the branch point of a nearly balanced
+disk, where the inverted spin turns into a saddle, continued in (spin, e) through BT1), held_spin.png (the real
+parts along the branch against the closed form (C3), the runs' outcomes and times over the held spin, two runs
+either side of the threshold) and held_spin_curves.png (the three curves against the closed form's omega_c, and
+the branch point against c0 = 0 of (C6)). About 3 min.
 """
 
 from __future__ import annotations
@@ -33,6 +35,8 @@ BRANCH_EPS = 0.005  # m/s
 THRESHOLD_EPS = (0.01, 0.005)  # m/s
 BRACKET = (29.0, 33.0)  # rad/s, the held spin
 SPINS = (15.0, 45.0)  # rad/s, the branch
+PITCHFORK_E = 0.9e-3  # m: below (A - B) / (m r) = 1.124 mm, the rolling inverted spin turns into a saddle
+PITCHFORK_BOUNDS = (0.5e-3, 1.1e-3)  # m
 CURVES = {"e": ((0.5e-3, 6e-3), 1e-3), "r": ((0.03, 0.07), 0.01), "mu": ((0.05, 1.0), 0.1)}  # bounds, scale
 STATUS_STYLE = {"inverted": ("o", "C2"), "cone": ("s", "C1"), "lift_off": ("x", "C3"), "horizon": ("^", "C0"),
                 "fell": ("v", "C4"), "nonfinite": ("*", "k")}
@@ -59,6 +63,18 @@ def curves(br, quick: bool) -> dict:
     return out
 
 
+def saddle_curve(quick: bool):
+    """BP1 of a nearly balanced disk (e = PITCHFORK_E < (A - B) / (m r)), where the inverted spin turns into a
+    saddle and two spins turned in the disk's plane branch off, continued in (spin, e): the damped window's upper
+    end, c0 = 0 of (C6) to O(eps^2)."""
+    system = held_spin.system()
+    br = dy.equilibrium_branch(system, held_spin.spin_state("inverted"), "spin", bounds=SPINS,
+                               pars=system.with_pars(spin=SPINS[0], eps=BRANCH_EPS, e=PITCHFORK_E), ds_max=0.5)
+    low, high = (0.85e-3, 0.95e-3) if quick else PITCHFORK_BOUNDS
+    return dy.special_point_curve(system, br, "BP1", ("spin", "e"), bounds={"e": (low, high), "spin": SPINS},
+                                  scales={"e": 1e-3, "spin": 1.0}, max_points=2000)
+
+
 def closed_form(name: str, values) -> np.ndarray:
     """omega_c (C4) of the Table 1-2 disk with ``name`` (e, r: A, B, C about G kept; mu) at ``values``."""
     disk = td.Disk()
@@ -67,8 +83,13 @@ def closed_form(name: str, values) -> np.ndarray:
     return np.array([cs.omega_critical(dataclasses.replace(disk, **{name: float(v)})).omega_critical for v in values])
 
 
-def curves_figure(found: dict, path: Path) -> None:
+def curves_figure(found: dict, saddle, path: Path) -> None:
     fig, ax = plt.subplots(1, 3, figsize=(17, 4.8), constrained_layout=True)
+    ax[0].plot(saddle.e.values * 1e3, saddle.spin.values, "C3",
+               label="BP1 of the held model: the inverted spin turns into a saddle")
+    marks = np.linspace(saddle.e.values.min(), saddle.e.values.max(), 10)
+    ax[0].plot(marks * 1e3, [cs.saddle_spins(td.Disk(e=float(v)))[0] for v in marks], "ks", ms=4, mfc="none",
+               label="closed form c0 = 0 (C6)")
     units = {"e": ("eccentricity e [mm]", 1e3), "r": ("radius r [mm]", 1e3), "mu": (r"friction coefficient $\mu$", 1.0)}
     for a, (name, curve) in zip(ax, found.items()):
         label, scale = units[name]
@@ -81,6 +102,7 @@ def curves_figure(found: dict, path: Path) -> None:
             a.annotate(str(lab), (curve[name].values[i] * scale, curve.spin.values[i]), textcoords="offset points",
                        xytext=(5, -10), fontsize=8)
         a.set(xlabel=label, ylabel="critical spin [rad/s]", title=f"the critical spin over {name}")
+    ax[0].set(title="the damped window over e: from HOPF2 (omega_c) up to BP1 (the saddle)")
     finish(fig, ax, path)
 
 
@@ -151,7 +173,10 @@ def main(output_dir: str = "output", quick: bool = False) -> Path:
     for name, curve in found_curves.items():
         curve_path = td.save(curve, out / f"held_spin_hopf2_{name}.nc")
         print(f"{curve_path}: {curve.attrs['message']}")
-    curves_figure(found_curves, out / "held_spin_curves.png")
+    saddle = saddle_curve(quick)
+    saddle_path = td.save(saddle, out / "held_spin_bp1_e.nc")
+    print(f"{saddle_path}: {saddle.attrs['message']}")
+    curves_figure(found_curves, saddle, out / "held_spin_curves.png")
     return path
 
 

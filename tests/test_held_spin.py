@@ -14,6 +14,9 @@ from scipy.optimize import fsolve
 
 from tippedisk_analysis import dynamics as dy
 from tippedisk_analysis.analysis import critical_spin, inversion
+from tippedisk_analysis.dynamics.continuation import Options, continue_branch
+from tippedisk_analysis.dynamics.equilibria import EquilibriumProblem, Parameter
+from tippedisk_analysis.dynamics.switching import switch_branch
 from tippedisk_analysis.errors import ParameterError
 from tippedisk_analysis.models import held_spin
 from tippedisk_analysis.parameters import Disk
@@ -95,6 +98,14 @@ def test_from_table_3_the_held_disk_inverts_above_its_threshold_and_rolls_off_be
     assert above.status == "inverted" and below.status == "lift_off", (above, below)
 
 
+def test_the_hopf_points_say_the_field_is_not_twice_differentiable_at_the_spin():
+    """The slow flow holds |lambda_T| (smoothed at 1e-12 N), which vanishes at the spin: the field is C^1 there,
+    so l1 does not apply (without the check it came out as -6e5 and -1.2e6, numbers of the smoothing)."""
+    br = inverted_branch()
+    assert list(br.special_label.values) == ["HOPF1", "HOPF2"]
+    assert list(br.special_smooth.values) == [0, 0] and list(br.special_l1.values) == [0.0, 0.0]
+
+
 def test_an_unknown_spin_is_refused_by_name():
     with pytest.raises(ParameterError, match="unknown spin 'upright'; choose one of inverted, lower"):
         held_spin.spin_state("upright")
@@ -150,3 +161,57 @@ def test_the_critical_spin_does_not_depend_on_mu():
 def test_the_held_model_needs_the_spin_it_holds():
     with pytest.raises(ParameterError, match="the held model needs the spin it holds"):
         inversion.parameters("held", inversion.with_eps(None, 0.01))
+
+
+def branch_point(e, eps):
+    """The inverted spin of the held model continued in the spin at ``e``, ``eps``: its problem, branch and BP1."""
+    system = held_spin.system()
+    prob = EquilibriumProblem(system, [Parameter.of(system, "spin", 1.0)],
+                              pars=system.with_pars(spin=20.0, eps=eps, e=e), bounds={0: (20.0, 40.0)})
+    br = continue_branch(prob, np.append(held_spin.spin_state("inverted"), 20.0), Options(ds_max=0.5))
+    (k,) = [k for k, sp in enumerate(br.special_points) if sp.kind == "branch_point"]
+    return prob, br, k
+
+
+def test_the_branch_point_of_a_nearly_balanced_disk_tends_to_the_closed_form_saddle_spin_as_eps_squared():
+    """e = 0.9 mm < (A - B) / (m r): the held model's zero eigenvalue, continued, against c0 = 0 of (C6)."""
+    (closed,) = critical_spin.saddle_spins(Disk(e=0.9e-3))
+    errors = [branch_point(0.9e-3, eps)[1].special_points[branch_point(0.9e-3, eps)[2]].u[-1] - closed
+              for eps in (0.01, 0.005)]
+    assert 3.5 < errors[0] / errors[1] < 4.5 and abs(errors[1]) < 0.1  # measured 0.2457, 0.0627 rad/s
+
+
+def test_at_the_branch_point_two_mirror_spins_turned_in_the_disks_plane_branch_off():
+    """A pitchfork: the two new branches are images under (beta, gamma) -> (pi - beta, pi - gamma), exist above
+    the branch point (where the inverted spin is a saddle) and are equilibria of the model (f = 0)."""
+    prob, br, k = branch_point(0.9e-3, 0.005)
+    new = switch_branch(prob, br, k)
+    assert len(new) == 2
+    ends = [b.points[-1].u for b in new]
+    assert np.allclose([e[-1] for e in ends], 40.0)  # both run up to the bound: above the branch point, 29.54
+    assert np.allclose(ends[0][:2] + ends[1][:2], math.pi, atol=1e-3)  # mirror images
+    assert min(abs(e[1] - 0.5 * math.pi) for e in ends) > 0.25  # turned well away from S above G
+    system = held_spin.system()
+    for u in ends:
+        assert np.abs(system.f(u[:4], system.with_pars(spin=u[-1], eps=0.005, e=0.9e-3))).max() < 1e-8
+
+
+def test_the_pitchfork_curve_lies_on_c0_zero_and_meets_the_hopf_curve_at_the_same_bt_point():
+    """BP1 and HOPF2 of a nearly balanced disk, each continued in (spin, e) from its own start: both end in one
+    Bogdanov-Takens point, with no cusp on the pitchfork curve (its fold coefficient is undefined at a C^1
+    spin), and the pitchfork curve lies on c0 = 0 of (C6) to O(eps^2)."""
+    system = held_spin.system()
+    br = dy.equilibrium_branch(system, held_spin.spin_state("inverted"), "spin", bounds=(20.0, 40.0),
+                               pars=system.with_pars(spin=20.0, eps=0.005, e=0.9e-3), ds_max=0.5)
+    bt = {}
+    for label in ("BP1", "HOPF2"):
+        curve = dy.special_point_curve(system, br, label, ("spin", "e"), bounds={"e": (0.85e-3, 0.95e-3),
+                                       "spin": (20.0, 40.0)}, scales={"e": 1e-3, "spin": 1.0})
+        labels = [str(lab) for lab in curve.special_label.values]
+        assert "BT1" in labels and not any(lab.startswith("CP") for lab in labels), (label, labels)
+        k = curve.special_index.values[labels.index("BT1")]
+        bt[label] = np.array([curve.spin.values[k], curve.e.values[k] * 1e3])
+        if label == "BP1":
+            closed = [critical_spin.saddle_spins(Disk(e=float(e)))[0] for e in curve.e.values]
+            assert np.abs(curve.spin.values - closed).max() < 0.15  # 0.067 rad/s at 30 rad/s, eps = 0.005
+    assert np.abs(bt["BP1"] - bt["HOPF2"]).max() < 1e-4
