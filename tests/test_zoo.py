@@ -7,6 +7,7 @@ from __future__ import annotations
 import copy
 import math
 
+import heyoka as hy
 import numpy as np
 import pytest
 from scipy.optimize import brentq
@@ -14,6 +15,7 @@ from scipy.optimize import brentq
 import tippedisk_analysis as td
 import zoo
 from tippedisk_analysis import dynamics as dy
+from tippedisk_analysis.errors import ParameterError
 
 EQUILIBRIUM, PERIODIC, IRREGULAR = 0, 1, 2
 
@@ -278,7 +280,7 @@ def test_a_hopf_point_where_the_field_is_only_c1_says_so_and_its_cycles_grow_lin
     eq = dy.equilibrium_branch(s, [0.0, 0.0], "mu", bounds=(-0.1, 0.2))
     assert list(eq.special_label.values) == ["HOPF1"] and abs(float(eq.mu[int(eq.special_index[0])])) < 1e-12
     assert int(eq.special_smooth[0]) == 0 and float(eq.special_l1[0]) == 0.0
-    assert "not twice differentiable" in eq.attrs["message"]
+    assert "the field has a kink there" in eq.attrs["message"]
     po = dy.orbit_branch(s, eq, "HOPF1", bounds=(-0.1, 0.2), marks=(0.1,))
     k = int(po.special_index.values[list(po.special_label.values).index("UZ1")])
     assert float(po.period[k]) == pytest.approx(2 * math.pi, rel=1e-9)
@@ -286,10 +288,35 @@ def test_a_hopf_point_where_the_field_is_only_c1_says_so_and_its_cycles_grow_lin
     assert int(po.stability[k]) == dy.STABILITY["stable"]
 
 
+def test_a_hopf_point_where_the_field_is_c2_but_not_c3_gets_no_l1():
+    """l1 takes third derivatives; here they jump (3 relu(x)^3), and the one-sided value would give the wrong sign."""
+    eq = dy.equilibrium_branch(zoo.c2_hopf(), [0.0, 0.0], "mu", bounds=(-0.5, 0.5))
+    assert list(eq.special_label.values) == ["HOPF1"] and list(eq.special_smooth.values) == [0]
+
+
 def test_smooth_hopf_points_are_not_flagged():
     for s, state in ((zoo.bautin(), [0.0, 0.0]), (zoo.generalised_hopf(), [0.0, 0.0])):
         eq = dy.equilibrium_branch(s, state, "mu", bounds=(-0.1, 0.2), pars=s.with_pars(mu=-0.1))
         assert list(eq.special_smooth.values) == [1], s.name
+
+
+def test_a_smooth_model_with_tiny_states_keeps_its_l1():
+    """Predator-prey densities of size 1e-5, no state scale given: smooth, and l1 = l1(size 1) / size^2 (l1 has
+    units of a rate per state squared), supercritical as the paradox of enrichment is."""
+    l1 = {}
+    for size in (1.0, 1e-5):
+        xs = 0.2 * size / 0.3  # X* = 2/3
+        eq = dy.equilibrium_branch(zoo.predator_prey(size), [xs, (1 - xs / (2 * size)) * (size + xs)], "mu",
+                                   bounds=(2.0, 5.0))
+        assert list(eq.special_label.values) == ["HOPF1"] and list(eq.special_smooth.values) == [1]
+        assert float(eq.mu[int(eq.special_index[0])]) == pytest.approx(7 / 3, rel=1e-10)
+        l1[size] = float(eq.special_l1[0])
+    assert l1[1.0] < 0 and l1[1e-5] == pytest.approx(l1[1.0] / 1e-10, rel=1e-6)
+
+
+def test_integer_powers_beside_a_function_sympy_cannot_read_are_refused_by_name():
+    with pytest.raises(ParameterError, match=r"write them as products, e.g. x\*x\*x"):
+        dy.System("relu_cube", [zoo.x, zoo.y], [hy.relu(zoo.x) ** 3, zoo.x], parameters={"mu": 0.0})
 
 
 def test_subcritical_hopf_point_and_its_unstable_orbits():

@@ -46,6 +46,22 @@ def c1_hopf(mu: float = -0.1) -> dy.System:
     return dy.System("c1_hopf_user", [x, y], [p0 * x - y - r * x, x + p0 * y - r * y], parameters={"mu": mu})
 
 
+def c2_hopf(mu: float = -0.5) -> dy.System:
+    """x' = mu x - y + 3 relu(x)^3 - x^3, y' = x + mu y: C^2 but not C^3 at the origin, where the Hopf point's l1
+    would take the third derivatives (-6 on one side, +12 on the other)."""
+    r = hy.relu(x)
+    return dy.System("c2_hopf_user", [x, y], [p0 * x - y + 3 * r * r * r - x * x * x, x + p0 * y],
+                     parameters={"mu": mu})
+
+
+def predator_prey(size: float = 1.0) -> dy.System:
+    """Rosenzweig-MacArthur with densities of ``size`` (x = size X): X' = X (1 - X / mu) - X Y / (1 + X),
+    Y' = 0.5 X Y / (1 + X) - 0.2 Y; a Hopf point at mu = 7/3 (the paradox of enrichment), smooth."""
+    return dy.System("predator_prey_user", [x, y],
+                     [x * (1 - x / (p0 * size)) - x * y / (size + x), 0.5 * x * y / (size + x) - 0.2 * y],
+                     parameters={"mu": 2.0})
+
+
 def generalised_hopf(mu: float = -0.1) -> dy.System:
     """r' = r (mu - r^4), theta' = 1: l1 = 0 at the Hopf point mu = 0, but not a centre: stable orbits of radius
     mu^(1/4) and period 2 pi for mu > 0."""

@@ -76,8 +76,9 @@ def special_table(br: Branch, system: System, kinds: dict = SPECIAL_KINDS) -> di
                                           {"no": 0, "yes": 1})),
         "special_smooth": ("special_point", np.array([SMOOTH_FLAGS[sp.data.get("smooth")] for sp in sps],
                                                      dtype=np.int8),
-                           flag_attrs("whether the vector field is twice differentiable at the point (no: a kink, "
-                                      "e.g. a |x| x term; l1 and the fold coefficient do not apply and are 0)",
+                           flag_attrs("whether the vector field is smooth enough at the point for its normal form "
+                                      "(no: a kink of the Jacobian, e.g. a |x| x term, or at a Hopf point of the "
+                                      "second derivatives; l1 and the fold coefficient do not apply and are 0)",
                                       {"no": 0, "yes": 1, "not_checked": 2})),
     }
 
@@ -148,7 +149,7 @@ def continuation_dataset(br: Branch, prob, info: dict | None = None, columns: di
 
 
 DEGENERATE_NOTE = " (degenerate: l1 = 0, a generalised Hopf point or a centre)"
-NOT_SMOOTH_NOTE = " (the field is not twice differentiable there: no normal-form coefficient)"
+NOT_SMOOTH_NOTE = " (the field has a kink there: no normal-form coefficient)"
 
 
 def summary(items: list[str], limit: int = 6) -> str:

@@ -48,8 +48,6 @@ class Parameter:
         return cls(name, scale, runtime=((system.parameter_index(name), 1.0),))
 
 
-KINK_STEPS = (1e-4, 2.5e-5)  # steps (times the state scale) of the second differences of J in _has_kink
-KINK_FLOOR = 1e-8  # a second difference below this share of |J| / scale is round-off, not a kink
 REAL_TOL = 1e-7  # relative |Im s| below which an eigenvalue counts as real: the eigenvalues of a Jordan
 # block (at a Bogdanov-Takens point) are only determined to sqrt(machine eps)
 
@@ -289,32 +287,14 @@ class EquilibriumProblem(continuation.Problem):
         G_xs, Gamma = self.nonsmooth(x, pars)
         return lambda w: (G_xs @ w) * np.linalg.norm(Gamma @ w)
 
-    def _has_kink(self, x: np.ndarray, pars: np.ndarray) -> bool:
-        """Whether the field is not twice differentiable at x (a C^1 term such as |x| x, or a smoothing of one
-        far below the step): along some state coordinate the second difference of the Jacobian keeps its size
-        as the step shrinks (a jump of the second derivative), where a C^3 field's shrinks with the step."""
-        n = self.n
-
-        def jacobian(y):
-            return self.field.tensor(y, pars, 1, with_parameters=False)[:n, :n]
-
-        J0 = jacobian(x)
-        size = max(float(np.abs(J0).max()), 1.0)
-        for k, scale in enumerate(self.scale[:n]):
-            step = np.zeros(n)
-            step[k] = 1.0
-            d = [float(np.abs(jacobian(x + h * scale * step) - 2 * J0 + jacobian(x - h * scale * step)).max())
-                 / (h * scale) for h in KINK_STEPS]
-            if d[1] > KINK_FLOOR * size / scale and d[1] > 0.5 * d[0]:
-                return True
-        return False
-
     def describe(self, kind: str, u: np.ndarray) -> dict:
         """The normal-form coefficients of special point ``kind`` at ``u`` and ``smooth``: whether the field is
-        twice differentiable there (:meth:`_has_kink`). Of an isolated equilibrium, l1 and the fold coefficient a
-        assume it: where it is not, the class is ``not_smooth`` and l1, a are 0 (not applicable)."""
+        smooth enough there for them (:meth:`.tensors.Field.has_kink`: no kink of the Jacobian; at a Hopf point,
+        where l1 takes third derivatives, none of the second derivatives either). Of an isolated equilibrium,
+        where it is not, the class is ``not_smooth`` and l1, a are 0 (not applicable)."""
         x, pars = u[: self.n], self.runtime(u)
-        smooth = not self._has_kink(x, pars)
+        orders = (1, 2) if kind == "hopf" else (1,)
+        smooth = not any(self.field.has_kink(x, pars, order, self.scale) for order in orders)
         return {**self._coefficients(kind, x, pars, smooth), "smooth": smooth}
 
     def _coefficients(self, kind: str, x: np.ndarray, pars: np.ndarray, smooth: bool) -> dict:

@@ -13,6 +13,8 @@ import re
 
 import heyoka as hy
 
+from ..errors import ParameterError
+
 _INTEGER_POWER = re.compile(r"\*\*([3-9]|[1-9]\d+)\.0+(?![0-9]*[1-9])")  # b**3.000..., b**12.000...
 
 
@@ -41,5 +43,9 @@ def expand_integer_powers(expression):
         replacements[symbol] = _power(hy.from_sympy(node.base, replacements), int(node.exp))
         return symbol
 
-    tree = hy.to_sympy(expression).replace(lambda e: e.is_Pow and e.exp.is_Integer and e.exp >= 3, expand)
-    return hy.from_sympy(tree, replacements)
+    try:
+        tree = hy.to_sympy(expression).replace(lambda e: e.is_Pow and e.exp.is_Integer and e.exp >= 3, expand)
+        return hy.from_sympy(tree, replacements)
+    except TypeError as exc:  # a function sympy cannot translate back (heyoka's relu, say)
+        raise ParameterError(f"cannot rewrite the integer powers of {expression} ({exc}); write them as products, "
+                             "e.g. x*x*x for x**3") from None

@@ -89,6 +89,41 @@ class Field:
         return out
 
 
+    def has_kink(self, x, pars, order: int, scale) -> bool:
+        """Whether the derivative tensor of ``order`` (1: the Jacobian, 2: the second derivatives) has a kink at
+        x along some state coordinate: a jump of the next derivative, as a |x| x term (order 1) or a relu(x)^3
+        term (order 2) gives, or a smoothing of one far below the steps. Per entry, the second difference over
+        steps h = KINK_STEPS times ``scale`` (the states' typical sizes) falls as h where the tensor is smooth,
+        grows as 1/h where round-off dominates, and keeps its size at a kink; the smallest pair of steps whose
+        differences stand above round-off (measured on the output's largest entry) and do not grow decides."""
+        x = np.asarray(x, dtype=float)
+        T0 = self.tensor(x, pars, order, with_parameters=False)
+        for k, size in enumerate(np.asarray(scale, dtype=float)[: self.n_state]):
+            step = np.zeros(self.n_state)
+            step[k] = size
+            seconds, floors = [], []
+            for h in KINK_STEPS:
+                plus = self.tensor(x + h * step, pars, order, with_parameters=False)
+                minus = self.tensor(x - h * step, pars, order, with_parameters=False)
+                seconds.append(np.abs(plus - 2 * T0 + minus) / (h * size))
+                magnitude = np.max(np.maximum(np.maximum(np.abs(plus), np.abs(minus)), np.abs(T0)).reshape(
+                    T0.shape[0], -1), axis=1).reshape(-1, *([1] * order))
+                floors.append(np.broadcast_to(KINK_ROUND_OFF * magnitude / (h * size), T0.shape))
+            decided = np.zeros(T0.shape, dtype=bool)
+            for i in range(len(KINK_STEPS) - 1, 0, -1):  # smallest pair of steps first
+                ratio = seconds[i] / np.maximum(seconds[i - 1], np.finfo(float).tiny)
+                clear = ~decided & (seconds[i] > floors[i]) & (seconds[i - 1] > floors[i - 1]) & (ratio < 2.0)
+                if np.any(clear & (ratio > KINK_RATIO)):
+                    return True
+                decided |= clear
+        return False
+
+
+KINK_STEPS = (1e-4, 1e-5, 1e-6, 1e-7)  # steps of Field.has_kink, times the state scale
+KINK_RATIO = 0.5  # second differences over steps 10x apart: ratio 0.1 where smooth, 1 at a kink, 10 in round-off
+KINK_ROUND_OFF = 1e4 * np.finfo(float).eps  # share of an output's largest entry its evaluation may be off by
+
+
 def bilinear(B: np.ndarray, a, b) -> np.ndarray:
     """B(a, b) = sum_jk B[:, j, k] a_j b_k (complex vectors allowed)."""
     return np.einsum("ijk,j,k->i", B, a, b)
