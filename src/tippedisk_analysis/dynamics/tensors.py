@@ -92,8 +92,8 @@ class Field:
     def has_kink(self, x, pars, order: int, scale) -> bool:
         """Whether the derivative tensor of ``order`` (1: the Jacobian, 2: the second derivatives) has a kink at
         x along some state coordinate: a jump of the next derivative, as an ``abs(x) * x`` term (order 1) or a
-        ``relu(x)**3`` term (order 2) gives, or a smoothing of one far below the steps. Per entry, the second difference over
-        steps h = KINK_STEPS times ``scale`` (the states' typical sizes) falls as h where the tensor is smooth,
+        ``relu(x)**3`` term (order 2) gives, or a smoothing of one far below the steps. Per entry, the second
+        difference over steps h = KINK_STEPS times ``scale`` (the states' typical sizes) falls as h where smooth,
         grows as 1/h where round-off dominates, and keeps its size at a kink; the smallest pair of steps whose
         differences stand above round-off (measured on the output's largest entry) and do not grow decides."""
         x = np.asarray(x, dtype=float)
