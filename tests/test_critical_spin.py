@@ -152,6 +152,26 @@ def test_below_the_balance_eccentricity_the_damped_window_ends_where_the_nutatio
         assert f"saddle above {w_s:.4f} rad/s" in found.message
 
 
+def test_a_window_narrower_than_the_scan_is_found():
+    """Just above the Bogdanov-Takens point the damped window is 0.04 rad/s wide, below the scan's 0.5 rad/s step:
+    the nutation rate (C3) is positive just below omega_c and negative inside the window."""
+    disk = Disk(e=0.891e-3)
+    found = cs.omega_critical(disk)
+    (w_s,) = found.saddle_spins
+    assert found.status == "completed" and 0.0 < w_s - found.omega_critical < 0.05
+    assert cs.rates(found.omega_critical - 1e-3, disk)["rate_nutation"] > 0
+    assert cs.rates(0.5 * (found.omega_critical + w_s), disk)["rate_nutation"] < 0
+
+
+def test_the_command_names_the_window_and_the_start_spin_at_its_top(capsys):
+    assert main(["critical-spin", "--json", "--e", "0.0009"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    (w_s,) = out["saddle_spins"]
+    assert out["omega_critical"] < out["check_spin"] < w_s  # the check measures inside the window
+    assert out["initial_spin_at_window_top"] > out["initial_spin_threshold"]
+    assert abs(out["check_relative_nutation_rate"]) < 1e-6
+
+
 def test_above_the_balance_eccentricity_the_rolling_inverted_spin_never_turns_into_a_saddle():
     disk = Disk()
     balance = (disk.A - disk.B) / (disk.m * disk.r)

@@ -64,9 +64,10 @@ from .rolling import spin_state
 
 __all__ = ["spin_matrices", "characteristic", "coefficients", "rates", "first_order_pairs",
            "stiffness_coefficients", "saddle_spins", "CriticalSpin", "omega_critical", "initial_spin_threshold",
-           "prediction_map", "derive", "check_against_jacobian"]
+           "prediction_map", "derive", "check_spin", "check_against_jacobian"]
 
 SCAN = (1.0, 400.0, 800)  # rad/s: omega_c is looked for on this grid of Omega (first growing -> damped change)
+SADDLE_OFFSET = 1e-9  # relative: the grid also holds the spins this close to each saddle spin, either side
 
 
 def spin_matrices(Omega, m, e, r, A, B, C, g, mu):
@@ -200,7 +201,10 @@ def omega_critical(disk: Disk | None = None, gravity: float = 9.81, mu: float = 
     for name, value, why in (("gravity", gravity, "in m/s^2"), ("mu", mu, "friction is what damps the nutation")):
         if not (isinstance(value, numbers.Real) and math.isfinite(value) and value > 0):
             raise ParameterError(f"{name} = {value!r}: the critical spin needs {name} > 0 ({why})")
-    grid = np.linspace(*SCAN)
+    saddles = saddle_spins(disk, gravity)
+    # the grid meets each saddle spin from both sides: a window closing there may be narrower than the grid's step
+    edges = [w * (1 + side * SADDLE_OFFSET) for w in saddles for side in (-1, 1)]
+    grid = np.unique(np.concatenate([np.linspace(*SCAN), [w for w in edges if SCAN[0] < w < SCAN[1]]]))
 
     def rate(key):
         return lambda w: rates(w, disk, gravity, mu)[key]
@@ -208,7 +212,6 @@ def omega_critical(disk: Disk | None = None, gravity: float = 9.81, mu: float = 
     nutation = np.array([rate("rate_nutation")(w) for w in grid])
     precession = np.array([rate("rate_precession")(w) for w in grid])
     w_p = _first_turn(rate("rate_precession"), grid, precession, growing_to_damped=False)
-    saddles = saddle_spins(disk, gravity)
     span = f"{SCAN[0]:g}-{SCAN[1]:g} rad/s"
     nan = float("nan")
     if not np.isfinite(nutation).any():
@@ -287,11 +290,20 @@ def derive():
 CHECK_EPS_PER_MU = 3e-4  # m/s: the eps of the check over mu (the Jacobian depends on eps / mu only)
 
 
+def check_spin(omega_c: float, disk: Disk | None = None, gravity: float = 9.81) -> float:
+    """The spin [rad/s] :func:`check_against_jacobian` measures the nutation's size at: 1 rad/s above omega_c, or
+    halfway to the damped window's top (C6) where that is nearer."""
+    above = [w for w in saddle_spins(disk, gravity) if w > omega_c]
+    return min(omega_c + 1.0, 0.5 * (omega_c + above[0])) if above else omega_c + 1.0
+
+
 def check_against_jacobian(omega_c: float, setup: Setup | None = None) -> float:
     """The real part of the nutation pair of the slow flow's numerical Jacobian (heyoka) at the inverted spin
-    omega_c, relative to its size 1 rad/s higher, at eps = CHECK_EPS_PER_MU mu: zero to O(eps / mu) when (C4) is
-    right (the answer checks itself), whatever the setup's mu."""
+    omega_c, relative to its size at :func:`check_spin` (a little higher, inside the damped window), at eps =
+    CHECK_EPS_PER_MU mu: zero to O(eps / mu) when (C4) is right (the answer checks itself), whatever the setup's
+    mu."""
     setup = Setup() if setup is None else setup
+    reference = check_spin(omega_c, setup.disk, setup.gravity)
     setup = inversion.with_eps(setup, CHECK_EPS_PER_MU * setup.friction.mu)
     system, pars = slow_flow.system(), inversion.parameters("slow", setup)
 
@@ -300,7 +312,7 @@ def check_against_jacobian(omega_c: float, setup: Setup | None = None) -> float:
         oscillating = ev[np.abs(ev.imag) > 1e-9 * max(1.0, w)]
         return oscillating[np.argmin(np.abs(oscillating.imag))].real
 
-    return float(nutation_real(omega_c) / abs(nutation_real(omega_c + 1.0)))
+    return float(nutation_real(omega_c) / abs(nutation_real(reference)))
 
 
 MAP_FLAGS = {"completed": 0, "no_crossing": 1, "not_elliptic": 2, "no_disk": 3}

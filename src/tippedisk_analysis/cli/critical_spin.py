@@ -47,6 +47,10 @@ def critical_spin(args) -> int:
         out["initial_spin_threshold"] = cs.initial_spin_threshold(found.omega_critical, setup, gamma0)
         out["nutation_frequency"] = found.nu_nutation
         out["check_relative_nutation_rate"] = cs.check_against_jacobian(found.omega_critical, setup)
+        out["check_spin"] = cs.check_spin(found.omega_critical, setup.disk, setup.gravity)
+        top = [w for w in found.saddle_spins if w > found.omega_critical]
+        if top:  # the window closes: a start with the rolling energy of its top arrives where the spin is a saddle
+            out["initial_spin_at_window_top"] = cs.initial_spin_threshold(top[0], setup, gamma0)
     if args.simulate:
         low = 0.8 * out["initial_spin_threshold"] if out["initial_spin_threshold"] else 15.0
         th = inversion.spin_threshold(setup=setup, gamma0=gamma0, bracket=(low, 2.0 * low), scan=11, xtol=1e-3)
@@ -71,7 +75,12 @@ def _text(out: dict) -> str:
                  f"{out['gamma0']:.4f} rad (C5: the start's rolling energy reaches the inverted spin's at omega_c; "
                  "friction's losses on the way neglected: a lower bound for starts with S below G)",
                  f"check: at omega_c the slow flow's Jacobian (heyoka, small eps) gives the nutation a real part "
-                 f"{out['check_relative_nutation_rate']:.1e} of its size 1 rad/s higher (0 when the formula holds)"]
+                 f"{out['check_relative_nutation_rate']:.1e} of the one at {out['check_spin']:.4f} rad/s (0 when the "
+                 "formula holds)"]
+        if "initial_spin_at_window_top" in out:
+            lines.insert(2, f"the window closes: from an initial spin of {out['initial_spin_at_window_top']:.4f} rad/s "
+                            "on (C5 at its top) the start has the rolling energy of an inverted spin that is a saddle "
+                            "(losses neglected)")
     if "full_model_status" in out:
         full, predicted = out["full_model_threshold"], out["initial_spin_threshold"]
         if full is None:
