@@ -202,3 +202,15 @@ def test_help_and_version_import_no_heavy_library():
             "if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == ""
+
+
+def test_a_reader_that_goes_away_ends_the_command_quietly():
+    """`tippedisk critical-spin | head -c 1`: the pipe closes before the output is written; no error line."""
+    import subprocess
+    import sys
+
+    proc = subprocess.Popen([sys.executable, "-m", "tippedisk_analysis.cli", "critical-spin"], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE)
+    proc.stdout.close()
+    _out, err = proc.communicate()
+    assert proc.returncode == 0 and b"error" not in err and b"Traceback" not in err, err

@@ -89,6 +89,9 @@ def _run(argv: list[str] | None) -> int:
             sys.stderr.flush()
             os._exit(EXIT_INTERRUPTED)
         return EXIT_INTERRUPTED
+    except BrokenPipeError:  # the reader of the output went away (| head): nothing to say to it
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
     except OSError as exc:  # the environment (disk full, a file removed meanwhile): one line, not a traceback
         where = f" '{exc.filename}'" if getattr(exc, "filename", None) else ""
         print(f"tippedisk {command}: error: {exc.strerror or exc}{where}; check the path, the disk space and "
