@@ -132,7 +132,8 @@ def continuation_dataset(br: Branch, prob, info: dict | None = None, columns: di
         "special_point": index_coordinate("special_point", len(br.special_points), "special point index")})
     free = [p.name for p in prob.free]
     labels = summary([f"{sp.label} at " + ", ".join(f"{name} = {sp.u[n + j]:.8g}" for j, name in enumerate(free))
-                      + {"degenerate": DEGENERATE_NOTE, "not_smooth": NOT_SMOOTH_NOTE}.get(sp.data.get("class"), "")
+                      + (NOT_SMOOTH_NOTE if sp.data.get("smooth") is False
+                         else DEGENERATE_NOTE if sp.data.get("class") == "degenerate" else "")
                       for sp in br.special_points])
     what = (f"curve of {'Hopf' if prob.critical == 'hopf' else 'zero-eigenvalue'} points" if prob.critical
             else "branch of equilibria")
