@@ -18,7 +18,7 @@ from tippedisk_analysis.analysis import inversion
 from tippedisk_analysis.analysis.rolling import spin_eigenvalues, spin_state
 from tippedisk_analysis.cli import main
 from tippedisk_analysis.models import reduced, slow_flow
-from tippedisk_analysis.parameters import Disk, InitialState, Setup
+from tippedisk_analysis.parameters import Disk, Friction, InitialState, Setup
 
 OTHER_DISKS = {"table 2": Disk(), "drilled, e 1.5 mm": Disk.from_geometry().with_eccentricity(1.5e-3),
                "drilled, r 40 mm": Disk.from_geometry(r=0.040), "table 2, e 10 mm": Disk().with_eccentricity(0.01)}
@@ -170,6 +170,22 @@ def test_the_command_names_the_window_and_the_start_spin_at_its_top(capsys):
     assert out["omega_critical"] < out["check_spin"] < w_s  # the check measures inside the window
     assert out["initial_spin_at_window_top"] > out["initial_spin_threshold"]
     assert abs(out["check_relative_nutation_rate"]) < 1e-6
+
+
+def test_ode_model_1s_branch_point_of_a_nearly_balanced_disk_tends_to_the_saddle_spin_as_eps_squared():
+    """The full model (slip as states), another formulation than (C6): its zero eigenvalue on the inverted spin's
+    family at e = 0.9 mm (measured 29.4077 and 29.5536 rad/s at eps 0.01, 0.005 against 29.6033)."""
+    from tippedisk_analysis.analysis import spin_continuation as sc
+
+    disk = Disk(e=0.9e-3)
+    (w_s,) = cs.saddle_spins(disk)
+    errors = []
+    for eps in (0.01, 0.005):
+        setup = Setup(disk=disk, friction=dataclasses.replace(Friction(), eps=eps))
+        ds = sc.continue_branch("inverted", "omega", 20.0, 40.0, setup=setup)
+        labels = [str(label) for label in ds.special_label.values]
+        errors.append(float(ds.omega.values[ds.special_index.values[labels.index("BP1")]]) - w_s)
+    assert 3.5 < errors[0] / errors[1] < 4.5 and abs(errors[1]) < 0.06
 
 
 def test_above_the_balance_eccentricity_the_rolling_inverted_spin_never_turns_into_a_saddle():
