@@ -291,13 +291,15 @@ class EquilibriumProblem(continuation.Problem):
         """The normal-form coefficients of special point ``kind`` at ``u`` and ``smooth``: whether the field is
         smooth enough there for them (:meth:`.tensors.Field.has_kink`: no kink of the Jacobian; at a Hopf point,
         where l1 takes third derivatives, none of the second derivatives either). Of an isolated equilibrium,
-        where it is not, the class is ``not_smooth`` and l1, a are 0 (not applicable)."""
+        where it is not, the class is ``not_smooth`` and l1, a are 0 (not applicable). On a line of equilibria
+        ``smooth`` is None: its normal forms carry the declared C^1 term (``nonsmooth``) and need no check."""
         x, pars = u[: self.n], self.runtime(u)
         orders = (1, 2) if kind == "hopf" else (1,)
-        smooth = not any(self.field.has_kink(x, pars, order, self.scale) for order in orders)
+        smooth = (None if self.family is not None
+                  else not any(self.field.has_kink(x, pars, order, self.scale) for order in orders))
         return {**self._coefficients(kind, x, pars, smooth), "smooth": smooth}
 
-    def _coefficients(self, kind: str, x: np.ndarray, pars: np.ndarray, smooth: bool) -> dict:
+    def _coefficients(self, kind: str, x: np.ndarray, pars: np.ndarray, smooth: bool | None) -> dict:
         n = self.n
         J = self.field.tensor(x, pars, 1, with_parameters=False)[:n]
         B = self.field.tensor(x, pars, 2, with_parameters=False)[:n]
@@ -307,7 +309,7 @@ class EquilibriumProblem(continuation.Problem):
             if phi0 is not None:
                 nf = normal_forms.line_hopf(J, B, phi0, N)
                 return {"frequency": nf["frequency"], "a": nf["a"], "b": nf["b"], "k": nf["k"], "class": nf["class"]}
-            if not smooth:
+            if smooth is False:
                 return {"frequency": normal_forms.hopf_frequency(J), "l1": 0.0, "l1_scale": 0.0,
                         "class": "not_smooth"}
             C = self.field.tensor(x, pars, 3, with_parameters=False)[:n]
@@ -319,7 +321,7 @@ class EquilibriumProblem(continuation.Problem):
             return {"a": nf["a"], "b": nf["b"], "c": nf["c"], "k": nf["k"], "class": nf["class"],
                     "class_negative": nf["class_negative"]}
         if kind in ("fold", "fold_or_bp"):
-            if not smooth:
+            if smooth is False:
                 return {"a": 0.0, "class": "not_smooth"}
             return {"a": normal_forms.fold_coefficient(J, B)["a"]}
         if kind == "bogdanov_takens":
