@@ -64,7 +64,7 @@ from .rolling import spin_state
 
 __all__ = ["spin_matrices", "characteristic", "coefficients", "rates", "first_order_pairs",
            "stiffness_coefficients", "saddle_spins", "CriticalSpin", "omega_critical", "initial_spin_threshold",
-           "prediction_map", "derive", "check_spin", "check_against_jacobian"]
+           "prediction_map", "derive", "window_top", "check_spin", "check_against_jacobian"]
 
 SCAN = (1.0, 400.0, 800)  # rad/s: omega_c is looked for on this grid of Omega (first growing -> damped change)
 SADDLE_OFFSET = 1e-9  # relative: the grid also holds the spins this close to each saddle spin, either side
@@ -139,6 +139,12 @@ def saddle_spins(disk: Disk | None = None, gravity: float = 9.81) -> tuple[float
     squares = np.roots([P, Q, R]) if P != 0 else np.array([-R / Q]) if Q != 0 else np.array([])
     real = [float(w2.real) for w2 in squares if abs(w2.imag) <= 1e-12 * abs(w2) and w2.real > 0]
     return tuple(sorted(math.sqrt(w2) for w2 in real))
+
+
+def window_top(saddles, omega_c: float) -> float:
+    """The first of ``saddles`` (:func:`saddle_spins`) above omega_c [rad/s]: where the damped window closes (NaN
+    if it does not)."""
+    return next((w for w in saddles if w > omega_c), math.nan)
 
 
 def _values(disk: Disk, gravity: float, mu: float) -> dict:
@@ -226,9 +232,9 @@ def omega_critical(disk: Disk | None = None, gravity: float = 9.81, mu: float = 
                             f"the nutation of the inverted spin does not turn from growing to damped on {span}"
                             + saddle)
     at = rates(w, disk, gravity, mu)
-    above = [s for s in saddles if s > w]
-    window = (f"from {w:.4f} up to {above[0]:.4f} rad/s, where the rolling inverted spin turns into a saddle "
-              "(c0 = 0, (C6))" if above else f"above {w:.4f} rad/s")
+    top = window_top(saddles, w)
+    window = (f"from {w:.4f} up to {top:.4f} rad/s, where the rolling inverted spin turns into a saddle "
+              "(c0 = 0, (C6))" if math.isfinite(top) else f"above {w:.4f} rad/s")
     return CriticalSpin(w, at["nu_nutation"], at["rate_precession"], w_p, saddles, "completed",
                         f"the nutation of the inverted spin is damped {window}")
 
@@ -293,8 +299,8 @@ CHECK_EPS_PER_MU = 3e-4  # m/s: the eps of the check over mu (the Jacobian depen
 def check_spin(omega_c: float, disk: Disk | None = None, gravity: float = 9.81) -> float:
     """The spin [rad/s] :func:`check_against_jacobian` measures the nutation's size at: 1 rad/s above omega_c, or
     halfway to the damped window's top (C6) where that is nearer."""
-    above = [w for w in saddle_spins(disk, gravity) if w > omega_c]
-    return min(omega_c + 1.0, 0.5 * (omega_c + above[0])) if above else omega_c + 1.0
+    top = window_top(saddle_spins(disk, gravity), omega_c)
+    return min(omega_c + 1.0, 0.5 * (omega_c + top)) if math.isfinite(top) else omega_c + 1.0
 
 
 def check_against_jacobian(omega_c: float, setup: Setup | None = None) -> float:

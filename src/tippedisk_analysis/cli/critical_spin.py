@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import json
+import math
 
 from .common import add_disk, disk_from_args, finite_float
 from .registry import command
@@ -48,9 +49,9 @@ def critical_spin(args) -> int:
         out["nutation_frequency"] = found.nu_nutation
         out["check_relative_nutation_rate"] = cs.check_against_jacobian(found.omega_critical, setup)
         out["check_spin"] = cs.check_spin(found.omega_critical, setup.disk, setup.gravity)
-        top = [w for w in found.saddle_spins if w > found.omega_critical]
-        if top:  # the window closes: a start with the rolling energy of its top arrives where the spin is a saddle
-            out["initial_spin_at_window_top"] = cs.initial_spin_threshold(top[0], setup, gamma0)
+        top = cs.window_top(found.saddle_spins, found.omega_critical)
+        if math.isfinite(top):  # the window closes: a start with its top's rolling energy arrives at a saddle
+            out["initial_spin_at_window_top"] = cs.initial_spin_threshold(top, setup, gamma0)
     if args.simulate:
         low = 0.8 * out["initial_spin_threshold"] if out["initial_spin_threshold"] else 15.0
         th = inversion.spin_threshold(setup=setup, gamma0=gamma0, bracket=(low, 2.0 * low), scan=11, xtol=1e-3)
