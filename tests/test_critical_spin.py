@@ -152,6 +152,11 @@ def test_below_the_balance_eccentricity_the_damped_window_ends_where_the_nutatio
         assert f"saddle above {w_s:.4f} rad/s" in found.message
 
 
+def test_a_balanced_disk_is_refused_with_one_line(capsys):
+    assert main(["critical-spin", "--e", "0"]) == 2
+    assert "a balanced disk (S at G) has no inversion to predict" in capsys.readouterr().err
+
+
 def test_a_window_narrower_than_the_scan_is_found():
     """Just above the Bogdanov-Takens point the damped window is 0.04 rad/s wide, below the scan's 0.5 rad/s step:
     the nutation rate (C3) is positive just below omega_c and negative inside the window."""

@@ -119,6 +119,9 @@ def check_start(setup: Setup, gamma0: float) -> None:
     (z_S < r + 0.8 e): a start already counted as inverted has no threshold."""
     if not (math.isfinite(gamma0) and abs(gamma0) <= math.pi):
         raise ParameterError(f"gamma0 = {gamma0!r} rad: give an angle in [-pi, pi] (Table 3: -pi/2 + 0.1)")
+    if setup.disk.e <= 0:
+        raise ParameterError("e = 0: a balanced disk (S at G) has no inversion to predict; give an eccentricity "
+                             "e > 0 [m] (Table 1: 0.0025)")
     z_S = float(system("slow").observe(start_state("slow", 0.0, setup, gamma0), parameters("slow", setup))["z_S"])
     disk = setup.disk
     if z_S >= disk.r + INVERSION_HEIGHT * disk.e:
