@@ -151,6 +151,17 @@ print(cs.check_against_jacobian(found.omega_critical))
 # another disk: 4 mm eccentricity, A, B, C about G kept
 print(cs.omega_critical(Disk().with_eccentricity(0.004)).omega_critical)
 ''',
+    "tippedisk_analysis.analysis.spin_passage": '''
+from tippedisk_analysis.analysis import inversion
+from tippedisk_analysis.analysis import spin_passage as sp
+
+# Table 3's start at 36 rad/s, eps = 0.02 m/s, run past the inversion (3 / eps seconds or until it falls)
+ds = sp.passage(36.0, setup=inversion.with_eps(None, 0.02))
+print(ds.attrs["message"])  # when S went up, when it fell back below G, how the run ended
+# ln A of the precession over 30 s of the stay, measured and from its linear rate at the current spin
+t0 = ds.attrs["t_inverted"] + 5.0
+print(sp.integrated_rate(ds, "precession", t0, t0 + 30.0))
+''',
     "tippedisk_analysis.plotting": '''
 import tippedisk_analysis as td
 from tippedisk_analysis.plotting import plot_dataset

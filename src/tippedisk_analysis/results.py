@@ -45,7 +45,8 @@ PAPER = ("Sailer, Eugster, Leine, The Tippedisk: a Tippetop Without Rotational S
          "(2020) 553-580, doi:10.1134/S1560354720060052")
 KIND_TITLES = {"simulation": "Simulation", "continuation": "Continuation", "periodic_orbits": "Periodic orbits",
                "lyapunov": "Lyapunov exponents", "poincare": "Poincare section", "basins": "Basins of attraction",
-               "outcome_map": "Outcome map", "stability_map": "Stability map", "bifurcation": "Bifurcation diagram"}
+               "outcome_map": "Outcome map", "stability_map": "Stability map", "bifurcation": "Bifurcation diagram",
+               "spin_passage": "Passage along the inverted spins"}
 
 # name: (units, long_name)
 VARIABLES: dict[str, tuple[str, str]] = {

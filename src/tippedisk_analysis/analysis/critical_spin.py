@@ -23,7 +23,8 @@ The critical spin omega_c is where the nutation (the slower pair, nu_1) turns fr
 
 a1 and a3 are both proportional to 1/mu and (C4) is homogeneous in them: omega_c depends on m, e, r, A, B, C
 and g only, not on mu or eps. The other pair (the precession, nu_2) grows above omega_c: the inverted spin
-itself is never asymptotically stable; the disk ends on a torus around it (docs/rolling.md).
+itself is never asymptotically stable. The free disk stays near it for a slow time of order 1/eps and falls
+(:mod:`.spin_passage`).
 
 The nutation is damped above omega_c only while it oscillates. c0 = nu_1^2 nu_2^2 is a quadratic in Omega^2,
 

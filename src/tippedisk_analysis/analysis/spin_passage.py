@@ -1,0 +1,200 @@
+"""After the inversion: the slow passage of the free disk along the family of inverted spins (docs/inversion.md).
+
+ODE Model 1 (:mod:`tippedisk_analysis.models.reduced`) from Table 3's start is run on past the inversion, and
+each sample near the inverted spin is split into the inverted spin's two slow modes at the sample's own spin
+alpha_dot: the nutation (the slower pair of (C2)) and the precession (the faster pair). The amplitude of a mode
+is the modulus of its coordinate ``w . (x - x*(alpha_dot))``, with ``w`` the left eigenvector of the reduced
+Jacobian at the spin x* (unit-norm right eigenvectors, the state's own units). Along a slow passage each
+amplitude changes at the real part of its eigenvalue at the current spin: ln A(t1) - ln A(t0) is
+the integral of Re lambda(alpha_dot(t)) dt, and the nutation's amplitude is smallest where the spin passes
+omega_c (C4).
+
+``passage`` returns the run as a dataset (kind ``spin_passage``) with the amplitudes, the spin, the height of S
+and these events: when S first passes r + 0.8 e (the inversion criterion, ``t_inverted``), when it falls back
+below G again (z_S < r, ``t_fell_back``; -1 s where it did not happen), and how the run ended (``fell``,
+``lift_off`` or ``horizon``). The modes are stored along dim ``near`` (coordinate ``near_time``): the samples
+with S above r + 0.5 e between the two times, where the split into modes about the spin means something.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+
+import heyoka as hy
+import numpy as np
+import xarray as xr
+
+from ..errors import ParameterError
+from ..models import reduced
+from ..parameters import InitialState, Setup, to_dict
+from ..results import flat_parameters, make_attrs
+from . import critical_spin, inversion
+from .stationary import stationary_state
+
+__all__ = ["MODES", "modal_amplitudes", "passage", "integrated_rate"]
+
+MODES = ("nutation", "precession")  # the slower and the faster pair of the inverted spin (C2)
+NEAR_SPIN = 0.5  # z_S > r + NEAR_SPIN e: the samples split into modes (S well above G)
+SAMPLE_STEP = 0.05  # s, between samples (the nutation period is about 1 s)
+NONE = -1.0  # t_inverted, t_fell_back [s] of a run in which it did not happen
+
+
+def _slow_pairs(eigenvalues: np.ndarray) -> tuple[int, int] | None:
+    """Indices of the nutation and precession eigenvalues (upper half plane): of the pairs with Im > 0, the two
+    least damped (the slip modes decay at O(1/eps)), slower first; None with fewer than two such pairs."""
+    upper = np.flatnonzero(eigenvalues.imag > 1e-9)
+    if upper.size < 2:
+        return None
+    slow = upper[np.argsort(np.abs(eigenvalues[upper].real))[:2]]
+    return tuple(slow[np.argsort(eigenvalues[slow].imag)])
+
+
+def _split(system, x: np.ndarray, spin: float, pars: np.ndarray, setup: Setup) -> dict | None:
+    """One state's modal amplitudes, rates and frequencies about the inverted spin at ``spin``; None where the
+    rolling spin there does not have two elliptic pairs (below their collision, (C2)), so that no pair is the
+    nutation or the precession."""
+    if math.isnan(critical_spin.rates(spin, setup.disk, setup.gravity, setup.friction.mu)["nu_nutation"]):
+        return None
+    spin_x = stationary_state("inverted", [spin])[:, 0]
+    eigenvalues, right = np.linalg.eig(system.jacobian(spin_x, pars))
+    pairs = _slow_pairs(eigenvalues)
+    if pairs is None:
+        return None
+    left = np.linalg.inv(right)
+    d = x - spin_x
+    d[1] = math.remainder(d[1], 2.0 * math.pi)  # gamma, about pi/2
+    out = {}
+    for mode, index in zip(MODES, pairs):
+        out[f"{mode}_amplitude"] = abs(left[index] @ d)
+        out[f"{mode}_rate"] = eigenvalues[index].real
+        out[f"{mode}_frequency"] = eigenvalues[index].imag
+    return out
+
+
+def modal_amplitudes(states: np.ndarray, spins: np.ndarray, setup: Setup | None = None) -> dict[str, np.ndarray]:
+    """The nutation and precession amplitudes of ODE Model 1 states (N, 7) of ``setup`` about the inverted spin
+    at their own spins alpha_dot (N,) [rad/s], with their eigenvalues there: {"<mode>_amplitude",
+    "<mode>_rate" (Re lambda, 1/s), "<mode>_frequency" (Im lambda, rad/s)}."""
+    setup = Setup() if setup is None else setup
+    system, pars = reduced.system(), inversion.parameters("smooth", setup)
+    rows = []
+    for x, spin in zip(states, spins):
+        row = _split(system, x, spin, pars, setup)
+        if row is None:
+            raise ParameterError(f"at {spin:.4g} rad/s the rolling inverted spin has no nutation and precession "
+                                 "pairs (below their collision, 18.28 rad/s for Tables 1-2); give faster spins")
+        rows.append(row)
+    keys = [f"{mode}_{what}" for mode in MODES for what in ("amplitude", "rate", "frequency")]
+    return {k: np.array([row[k] for row in rows], dtype=float) for k in keys}
+
+
+def passage(spin: float, *, setup: Setup | None = None, gamma0: float | None = None,
+            slow_time: float = 3.0, tol: float = 1e-10) -> xr.Dataset:
+    """Run ODE Model 1 from Table 3's start at initial spin ``spin`` [rad/s] for ``slow_time`` / eps [s] (or
+    until it falls or lifts off) and split the samples near the inverted spin into its modes
+    (:func:`modal_amplitudes`). Status ``completed`` when the run reached its end; ``not_inverted`` when S never
+    passed r + 0.8 e (no passage to split); ``nonfinite`` when the integration broke down (ending nonfinite; its
+    finite samples are kept)."""
+    setup = Setup() if setup is None else setup
+    gamma0 = InitialState().gamma if gamma0 is None else float(gamma0)
+    inversion.check_start(setup, gamma0)
+    if not (math.isfinite(slow_time) and slow_time > 0):
+        raise ParameterError(f"slow_time = {slow_time!r} (eps * t, m): give a positive number, e.g. 3")
+    eps, disk = setup.friction.eps, setup.disk
+    system = reduced.system()
+    pars = inversion.parameters("smooth", setup)
+    t_end = slow_time / eps
+    ta = copy.deepcopy(system.taylor(tol, events=True))
+    ta.time = 0.0
+    ta.state[:] = inversion.start_state("smooth", spin, setup, gamma0)
+    ta.pars[:] = pars[: len(ta.pars)]
+    times = np.linspace(0.0, t_end, int(math.ceil(t_end / SAMPLE_STEP)) + 1)
+    result = ta.propagate_grid(times)
+    states = result[-1]
+    finite = np.all(np.isfinite(states), axis=1)
+    kept = len(states) if finite.all() else int(np.argmin(finite))  # up to the first non-finite sample
+    ending = _ending(result[0], system, broken=kept < len(states))
+    states, times = states[:kept], times[:kept]
+    observed = system.observe(states.T, pars)
+    height = (np.asarray(observed["z_S"]) - disk.r) / disk.e  # z_S = r + height e
+    spins = np.asarray(observed["alpha_dot"])
+    up = np.flatnonzero(height > inversion.INVERSION_HEIGHT)
+    t_inverted = times[up[0]] if up.size else NONE
+    back = np.flatnonzero((times > t_inverted) & (height < 0.0)) if up.size else np.array([], int)
+    t_back = times[back[0]] if back.size else NONE
+    near = (height > NEAR_SPIN) & (times >= t_inverted) & ((times < t_back) if back.size else True) & bool(up.size)
+    rows = {}
+    for k in np.flatnonzero(near):
+        row = _split(system, states[k], spins[k], pars, setup)
+        if row is None:  # a spin below the collision of the pairs: no modes to split into
+            near[k] = False
+        else:
+            rows[k] = row
+    keys = [f"{mode}_{what}" for mode in MODES for what in ("amplitude", "rate", "frequency")]
+    modes = {key: np.array([rows[k][key] for k in sorted(rows)], dtype=float) for key in keys} if rows else {}
+    info = dict(initial_spin=float(spin), gamma0=gamma0, ending=ending, t_end=float(times[-1]),
+                t_inverted=float(t_inverted), t_fell_back=float(t_back))
+    status = "nonfinite" if ending == "nonfinite" else "completed" if up.size else "not_inverted"
+    return _dataset(times, height, spins, np.asarray(observed["E_tot"]), near, modes, setup, status, info)
+
+
+def _ending(outcome, system, broken: bool) -> str:
+    """How a run ended: ``horizon``, the name of the terminal event, or ``nonfinite``."""
+    if broken:
+        return "nonfinite"
+    if outcome == hy.taylor_outcome.time_limit:
+        return "horizon"
+    index = -int(outcome) - 1
+    return system.events[index].name if 0 <= index < len(system.events) else "nonfinite"
+
+
+def _dataset(times, height, spins, energy, near, modes, setup, status, info) -> xr.Dataset:
+    units = {"amplitude": ("1", "modulus of the mode's coordinate (left eigenvector, unit-norm right)"),
+             "rate": ("s-1", "real part of the mode's eigenvalue at the sample's spin"),
+             "frequency": ("rad s-1", "imaginary part of the mode's eigenvalue at the sample's spin")}
+    data = {"height": ("time", height, {"units": "1", "long_name": "height of S above G in units of e: "
+                                        "(z_S - r) / e"}),
+            "spin": ("time", spins, {"units": "rad s-1", "long_name": "spin about the vertical alpha_dot"}),
+            "E_tot": ("time", energy, {"units": "J", "long_name": "total energy"}),
+            "near_spin": ("time", near.astype("i1"), {"long_name": "whether the sample is split into modes",
+                                                      "flag_values": np.array([0, 1], "i1"),
+                                                      "flag_meanings": "away split_into_modes"})}
+    for key, values in modes.items():
+        mode, what = key.rsplit("_", 1)
+        unit, long = units[what]
+        data[key] = ("near", values, {"units": unit, "long_name": f"{mode}: {long}"})
+    coords = {"time": ("time", times, {"units": "s", "long_name": "time"}),
+              "near_time": ("near", times[near], {"units": "s", "long_name": "time of the samples split into "
+                                                  "modes (S above r + 0.5 e, between inversion and fall-back)"})}
+    ds = xr.Dataset(data, coords=coords)
+    config = {"setup": to_dict(setup), "initial_spin": info["initial_spin"], "gamma0": info["gamma0"]}
+    ending = f"the run ended: {info['ending']} at {info['t_end']:.2f} s"
+    if status == "completed":
+        back = (f"fell back below G at {info['t_fell_back']:.2f} s" if info["t_fell_back"] != NONE else
+                "did not fall back below G")
+        message = f"S passed r + {inversion.INVERSION_HEIGHT:g} e at {info['t_inverted']:.2f} s, {back}; {ending}"
+    else:
+        message = f"S never passed r + {inversion.INVERSION_HEIGHT:g} e; {ending}"
+    ds.attrs = make_attrs("spin_passage", config, status, message, model=reduced.system().name,
+                          **flat_parameters(setup), **info)
+    return ds
+
+
+def integrated_rate(ds: xr.Dataset, mode: str, t0: float, t1: float) -> tuple[float, float]:
+    """(measured, predicted) change of ln amplitude of ``mode`` from t0 to t1 [s] of a passage: ln A(t1)/A(t0)
+    against the integral of Re lambda(alpha_dot(t)) dt (trapezoid over the samples)."""
+    if mode not in MODES:
+        raise ParameterError(f"unknown mode {mode!r}; choose one of {', '.join(MODES)}")
+    times = ds.near_time.values
+    inside = (times >= t0) & (times <= t1)
+    if inside.sum() < 2 or not np.all(np.diff(np.flatnonzero(inside)) == 1) or (
+            np.any(np.diff(times[inside]) > 1.5 * SAMPLE_STEP)):
+        span = (f"{times[0]:.2f}-{times[-1]:.2f} s; a window must not span a gap" if times.size else "none: the start did not "
+                "invert")
+        raise ParameterError(f"[{t0:g}, {t1:g}] s is not inside the passage near the inverted spin (its samples: "
+                             f"{span}); pick times inside it")
+    amplitude, rate = ds[f"{mode}_amplitude"].values[inside], ds[f"{mode}_rate"].values[inside]
+    measured = math.log(amplitude[-1] / amplitude[0])
+    predicted = float(np.trapezoid(rate, times[inside]))
+    return measured, predicted
