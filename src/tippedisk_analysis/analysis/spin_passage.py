@@ -190,10 +190,12 @@ def integrated_rate(ds: xr.Dataset, mode: str, t0: float, t1: float) -> tuple[fl
     inside = (times >= t0) & (times <= t1)
     if inside.sum() < 2 or not np.all(np.diff(np.flatnonzero(inside)) == 1) or (
             np.any(np.diff(times[inside]) > 1.5 * SAMPLE_STEP)):
-        span = (f"{times[0]:.2f}-{times[-1]:.2f} s; a window must not span a gap" if times.size else "none: the start did not "
-                "invert")
-        raise ParameterError(f"[{t0:g}, {t1:g}] s is not inside the passage near the inverted spin (its samples: "
-                             f"{span}); pick times inside it")
+        breaks = np.flatnonzero(np.diff(times) > 1.5 * SAMPLE_STEP)
+        starts, ends = np.r_[0, breaks + 1], np.r_[breaks, times.size - 1]
+        span = (", ".join(f"{times[i]:.2f}-{times[j]:.2f} s" for i, j in list(zip(starts, ends))[:4])
+                + (", ..." if starts.size > 4 else "") if times.size else "none: the start did not invert")
+        raise ParameterError(f"[{t0:g}, {t1:g}] s is not inside the passage near the inverted spin (its stretches: "
+                             f"{span}); pick times inside one stretch")
     amplitude, rate = ds[f"{mode}_amplitude"].values[inside], ds[f"{mode}_rate"].values[inside]
     measured = math.log(amplitude[-1] / amplitude[0])
     predicted = float(np.trapezoid(rate, times[inside]))
