@@ -54,6 +54,24 @@ def summary(spin: float, eps: float, ds) -> str:
     return line
 
 
+def energy_check(ds, setup) -> str:
+    """The energy the full model loses over a stretch of the stay against the modes' friction power."""
+    times, power = ds.near_time.values, sp.modal_friction_power(ds, setup)
+    energy = ds.E_tot.values[ds.near_spin.values == 1]
+    t_in, eps = ds.attrs["t_inverted"], setup.friction.eps
+    lines = []
+    for start, end in ((2.0 * eps, 0.35), (0.35, 0.6)):  # slow time eps t after the inversion [m]
+        window = np.flatnonzero((times >= t_in + start / eps) & (times <= t_in + end / eps))
+        if window.size < 2 or np.any(np.diff(window) != 1):
+            lines.append(f"    energy: eps t {start:g}-{end:g} m after the inversion is not one stretch near the spin")
+            continue
+        lost = energy[window[-1]] - energy[window[0]]
+        modal = np.trapezoid(power[window], times[window])
+        lines.append(f"    energy lost over eps t {start:g}-{end:g} m after the inversion: {lost:.4e} J, the modes' "
+                     f"friction power {modal:.4e} J ({modal / lost:.1%})")
+    return "\n".join(lines)
+
+
 def figure(found: dict, path: Path) -> None:
     fig, ax = plt.subplots(1, 3, figsize=(15, 4.2))
     for (spin, eps), ds in found.items():
@@ -89,6 +107,10 @@ def main(output_dir: str = "output", quick: bool = False) -> Path:
     found = runs(quick)
     for (spin, eps), ds in found.items():
         print(summary(spin, eps, ds), flush=True)
+        if ds.attrs["status"] == "completed":
+            print(energy_check(ds, inversion.with_eps(None, eps)), flush=True)
+    print("per |z|^2 at 32 rad/s, eps 0.01 m/s:", {k: float(f"{v:.4g}") for k, v in
+                                                  sp.mode_energetics(32.0, inversion.with_eps(None, 0.01)).items()})
     path = td.save(found[(SPIN, STORED_EPS)], out / "spin_passage.nc")
     figure(found, path.with_name("spin_passage.png"))
     print(f"{path}: {found[(SPIN, STORED_EPS)].attrs['message']}")

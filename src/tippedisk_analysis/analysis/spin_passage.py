@@ -9,6 +9,11 @@ amplitude changes at the real part of its eigenvalue at the current spin: ln A(t
 the integral of Re lambda(alpha_dot(t)) dt, and the nutation's amplitude is smallest where the spin passes
 omega_c (C4).
 
+Where the energy goes (:func:`mode_energetics`): per squared amplitude and averaged over its phase, each mode
+holds the energy kappa above the spin's and costs the friction power pi; the spins' own energy grows as
+A Omega. So, to second order in the amplitudes, A Omega dOmega/dt = sum_k (pi_k - 2 Re lambda_k kappa_k)
+|z_k|^2 (C7): the decaying nutation feeds the spin, the slipping and growing precession drains it.
+
 ``passage`` returns the run as a dataset (kind ``spin_passage``) with the amplitudes, the spin, the height of S
 and these events: when S first passes r + 0.8 e (the inversion criterion, ``t_inverted``), when it falls back
 below G again (z_S < r, ``t_fell_back``; -1 s where it did not happen), and how the run ended (``fell``,
@@ -19,6 +24,7 @@ with S above r + 0.5 e between the two times, where the split into modes about t
 from __future__ import annotations
 
 import copy
+import functools
 import math
 
 import heyoka as hy
@@ -32,7 +38,8 @@ from ..results import flat_parameters, make_attrs
 from . import critical_spin, inversion
 from .stationary import stationary_state
 
-__all__ = ["MODES", "modal_amplitudes", "passage", "integrated_rate"]
+__all__ = ["MODES", "modal_amplitudes", "mode_energetics", "energy_and_power", "modal_friction_power", "passage",
+           "integrated_rate"]
 
 MODES = ("nutation", "precession")  # the slower and the faster pair of the inverted spin (C2)
 NEAR_SPIN = 0.5  # z_S > r + NEAR_SPIN e: the samples split into modes (S well above G)
@@ -69,6 +76,56 @@ def _split(system, x: np.ndarray, spin: float, pars: np.ndarray, setup: Setup) -
         out[f"{mode}_amplitude"] = abs(left[index] @ d)
         out[f"{mode}_rate"] = eigenvalues[index].real
         out[f"{mode}_frequency"] = eigenvalues[index].imag
+    return out
+
+
+PHASES = 16  # phases of a mode averaged over in :func:`mode_energetics`
+PROBE = 1e-5  # modal amplitude of the probes in :func:`mode_energetics` (quadratic terms; the error is O(PROBE^2))
+
+
+@functools.lru_cache(maxsize=None)
+def _energy_cfuncs():
+    """Compiled E_tot(x) and its power dE/dt = grad E . f (friction's: the only force that works in ODE
+    Model 1)."""
+    system = reduced.system()
+    energy = system.observables["E_tot"][0]
+    power = sum(g * f for g, f in zip(system.gradient_expressions([energy]), system.rhs))
+    return system.function("E_tot", [energy]), system.function("power of E_tot", [power], "the power")
+
+
+def energy_and_power(states: np.ndarray, setup: Setup | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """E_tot [J] and dE/dt [W] (the friction power) of ODE Model 1 states (7,) or (7, N) of ``setup``."""
+    system, pars = reduced.system(), inversion.parameters("smooth", Setup() if setup is None else setup)
+    e_fn, p_fn = _energy_cfuncs()
+    return system.evaluate(e_fn, states, pars)[0], system.evaluate(p_fn, states, pars)[0]
+
+
+def mode_energetics(spin: float, setup: Setup | None = None) -> dict[str, float]:
+    """What each mode of the inverted spin at ``spin`` [rad/s] holds and costs, per squared modal amplitude
+    ``|z|^2`` (z: the coordinate of :func:`modal_amplitudes`), averaged over the mode's phase:
+    "<mode>_energy" [J] (E_tot above the spin's), "<mode>_friction_power" [W] (mean dE/dt: friction's work,
+    <= 0) and "<mode>_rate" [1/s] (Re lambda); "spin_energy_slope" dE*/dOmega [J s] of the spins themselves."""
+    setup = Setup() if setup is None else setup
+    system, pars = reduced.system(), inversion.parameters("smooth", setup)
+    spin_x = stationary_state("inverted", [spin])[:, 0]
+    eigenvalues, right = np.linalg.eig(system.jacobian(spin_x, pars))
+    pairs = _slow_pairs(eigenvalues)
+    if pairs is None or math.isnan(critical_spin.rates(spin, setup.disk, setup.gravity,
+                                                       setup.friction.mu)["nu_nutation"]):
+        raise ParameterError(f"at {spin:.4g} rad/s the rolling inverted spin has no nutation and precession "
+                             "pairs (below their collision, 18.28 rad/s for Tables 1-2); give a faster spin")
+    phases = np.exp(2j * math.pi * np.arange(PHASES) / PHASES)
+    out = {}
+    for mode, index in zip(MODES, pairs):
+        probes = spin_x[:, None] + 2.0 * PROBE * (phases[None, :] * right[:, index:index + 1]).real  # |z| = PROBE
+        energy, power = energy_and_power(probes, setup)
+        out[f"{mode}_energy"] = float((energy - energy_and_power(spin_x, setup)[0]).mean()) / PROBE**2
+        out[f"{mode}_friction_power"] = float(power.mean()) / PROBE**2
+        out[f"{mode}_rate"] = float(eigenvalues[index].real)
+    step = 1e-4 * spin
+    ends = stationary_state("inverted", [spin - step, spin + step])
+    low, high = energy_and_power(ends, setup)[0]
+    out["spin_energy_slope"] = float(high - low) / (2.0 * step)
     return out
 
 
@@ -179,6 +236,23 @@ def _dataset(times, height, spins, energy, near, modes, setup, status, info) -> 
     ds.attrs = make_attrs("spin_passage", config, status, message, model=reduced.system().name,
                           **flat_parameters(setup), **info)
     return ds
+
+
+def modal_friction_power(ds: xr.Dataset, setup: Setup | None = None, n_spins: int = 25) -> np.ndarray:
+    """The friction power [W] of a passage's modes along dim ``near``: sum over the modes of
+    "<mode>_friction_power" (:func:`mode_energetics`, on ``n_spins`` spins over the passage, interpolated) times
+    the squared amplitude. Against the run's own dE/dt it says how much of the loss the linear modes explain."""
+    setup = Setup() if setup is None else setup
+    spins = ds.spin.values[ds.near_spin.values == 1]
+    if spins.size == 0:
+        raise ParameterError("the passage has no samples near the inverted spin (the start did not invert)")
+    grid = np.linspace(spins.min(), spins.max(), n_spins) if np.ptp(spins) > 0 else spins[:1]
+    table = [mode_energetics(float(w), setup) for w in grid]
+    total = np.zeros(spins.size)
+    for mode in MODES:
+        coefficient = np.interp(spins, grid, [row[f"{mode}_friction_power"] for row in table])
+        total += coefficient * ds[f"{mode}_amplitude"].values ** 2
+    return total
 
 
 def integrated_rate(ds: xr.Dataset, mode: str, t0: float, t1: float) -> tuple[float, float]:
