@@ -144,9 +144,19 @@ def test_a_start_that_does_not_invert_has_no_passage_and_says_so():
     assert int(ds.near_spin.sum()) == 0 and "nutation_amplitude" not in ds and ds.sizes["near"] == 0
 
 
+def test_a_disk_that_lifts_off_before_it_inverts_is_undecided_not_a_no():
+    ds = sp.passage(46.0, setup=Setup(disk=Disk().with_eccentricity(0.01)))  # lambda_N < 0 at 3.4 s
+    assert ds.attrs["status"] == "undecided" and ds.attrs["ending"] == "lift_off"
+    assert "decides nothing" in ds.attrs["message"]
+
+
 def test_bad_arguments_are_one_line_errors():
     with pytest.raises(ParameterError, match="slow_time"):
         sp.passage(36.0, slow_time=-1.0)
+    with pytest.raises(ParameterError, match="t0 < t1"):
+        sp.integrated_rate(passage(0.02), "nutation", 20.0, 10.0)
+    with pytest.raises(ParameterError, match="finite spin"):
+        sp.mode_energetics(float("nan"))
     with pytest.raises(ParameterError, match="unknown mode"):
         sp.integrated_rate(passage(0.02), "wobble", 10.0, 20.0)
     with pytest.raises(ParameterError, match="not inside the passage"):

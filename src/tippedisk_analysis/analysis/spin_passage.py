@@ -106,6 +106,8 @@ def mode_energetics(spin: float, setup: Setup | None = None) -> dict[str, float]
     "<mode>_energy" [J] (E_tot above the spin's), "<mode>_friction_power" [W] (mean dE/dt: friction's work,
     <= 0) and "<mode>_rate" [1/s] (Re lambda); "spin_energy_slope" dE*/dOmega [J s] of the spins themselves."""
     setup = Setup() if setup is None else setup
+    if not math.isfinite(spin):
+        raise ParameterError(f"spin = {spin!r}: give a finite spin in rad/s")
     system, pars = reduced.system(), inversion.parameters("smooth", setup)
     spin_x = stationary_state("inverted", [spin])[:, 0]
     eigenvalues, right = np.linalg.eig(system.jacobian(spin_x, pars))
@@ -134,6 +136,8 @@ def modal_amplitudes(states: np.ndarray, spins: np.ndarray, setup: Setup | None 
     at their own spins alpha_dot (N,) [rad/s], with their eigenvalues there: {"<mode>_amplitude",
     "<mode>_rate" (Re lambda, 1/s), "<mode>_frequency" (Im lambda, rad/s)}."""
     setup = Setup() if setup is None else setup
+    if not (np.all(np.isfinite(states)) and np.all(np.isfinite(spins))):
+        raise ParameterError("states and spins must be finite numbers")
     system, pars = reduced.system(), inversion.parameters("smooth", setup)
     rows = []
     for x, spin in zip(states, spins):
@@ -151,8 +155,9 @@ def passage(spin: float, *, setup: Setup | None = None, gamma0: float | None = N
     """Run ODE Model 1 from Table 3's start at initial spin ``spin`` [rad/s] for ``slow_time`` / eps [s] (or
     until it falls or lifts off) and split the samples near the inverted spin into its modes
     (:func:`modal_amplitudes`). Status ``completed`` when the run reached its end; ``not_inverted`` when S never
-    passed r + 0.8 e (no passage to split); ``nonfinite`` when the integration broke down (ending nonfinite; its
-    finite samples are kept)."""
+    passed r + 0.8 e (no passage to split); ``undecided`` when C1 lifted off before that (the bilateral model
+    decides nothing); ``nonfinite`` when the integration broke down (ending nonfinite; its finite samples are
+    kept)."""
     setup = Setup() if setup is None else setup
     gamma0 = InitialState().gamma if gamma0 is None else float(gamma0)
     inversion.check_start(setup, gamma0)
@@ -192,7 +197,8 @@ def passage(spin: float, *, setup: Setup | None = None, gamma0: float | None = N
     modes = {key: np.array([rows[k][key] for k in sorted(rows)], dtype=float) for key in keys} if rows else {}
     info = dict(initial_spin=float(spin), gamma0=gamma0, ending=ending, t_end=float(times[-1]),
                 t_inverted=float(t_inverted), t_fell_back=float(t_back))
-    status = "nonfinite" if ending == "nonfinite" else "completed" if up.size else "not_inverted"
+    status = ("nonfinite" if ending == "nonfinite" else "completed" if up.size else
+              "undecided" if ending == "lift_off" else "not_inverted")
     return _dataset(times, height, spins, np.asarray(observed["E_tot"]), near, modes, setup, status, info)
 
 
@@ -231,6 +237,9 @@ def _dataset(times, height, spins, energy, near, modes, setup, status, info) -> 
         back = (f"fell back below G at {info['t_fell_back']:.2f} s" if info["t_fell_back"] != NONE else
                 "did not fall back below G")
         message = f"S passed r + {inversion.INVERSION_HEIGHT:g} e at {info['t_inverted']:.2f} s, {back}; {ending}"
+    elif status == "undecided":
+        message = (f"C1 lifted off before S passed r + {inversion.INVERSION_HEIGHT:g} e, at {info['t_end']:.2f} s: "
+                   "the bilateral model decides nothing there")
     else:
         message = f"S never passed r + {inversion.INVERSION_HEIGHT:g} e; {ending}"
     ds.attrs = make_attrs("spin_passage", config, status, message, model=reduced.system().name,
@@ -260,6 +269,8 @@ def integrated_rate(ds: xr.Dataset, mode: str, t0: float, t1: float) -> tuple[fl
     against the integral of Re lambda(alpha_dot(t)) dt (trapezoid over the samples)."""
     if mode not in MODES:
         raise ParameterError(f"unknown mode {mode!r}; choose one of {', '.join(MODES)}")
+    if not (math.isfinite(t0) and math.isfinite(t1) and t0 < t1):
+        raise ParameterError(f"give finite times t0 < t1 [s], not [{t0}, {t1}]")
     times = ds.near_time.values
     inside = (times >= t0) & (times <= t1)
     if inside.sum() < 2 or not np.all(np.diff(np.flatnonzero(inside)) == 1) or (
