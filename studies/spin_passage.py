@@ -7,7 +7,7 @@ Runs ODE Model 1 (symmetry-reduced) from Table 3's start at 36 rad/s on past the
 0.005 m/s (and 40 rad/s at eps 0.01), splits each sample near the inverted spin into its nutation and precession
 (analysis/spin_passage.py) and prints, per run, the slow times eps t of the inversion and of the fall back below G
 and the linear rates against the measured growth. Writes spin_passage.nc (kind spin_passage: the run at eps
-0.01 m/s, 36 rad/s) and spin_passage.png.
+0.01 m/s, 36 rad/s) and spin_passage.png (with the amplitude model (C8) from eps t = 0.35 m after the inversion).
 """
 
 from __future__ import annotations
@@ -28,6 +28,7 @@ SPIN = 36.0  # rad/s: above the threshold 33.69 rad/s (eps 0.1) of the Table 3 s
 EPS = (0.1, 0.05, 0.02, 0.01, 0.005)  # m/s
 STORED_EPS = 0.01  # m/s: the run stored
 EXTRA = ((40.0, 0.01),)  # (spin, eps) of further runs (printed, not drawn)
+MODEL_START = 0.35  # m: the amplitude model (C8) starts at this slow time after the inversion
 
 
 def runs(quick: bool) -> dict:
@@ -92,6 +93,16 @@ def figure(found: dict, path: Path) -> None:
         linear = amplitude[anchor] * np.exp(integral - integral[anchor])
         ax[1].semilogy(near_t, amplitude, color=color, lw=0.5, label=f"{mode}, ODE Model 1")
         ax[1].semilogy(near_t, linear, color=color, ls="--", label=f"{mode}, exp of the integrated Re lambda")
+    setup = inversion.with_eps(None, STORED_EPS)
+    start = near_t[np.searchsorted(near_t, ds.attrs["t_inverted"] + MODEL_START / STORED_EPS)]
+    model_t = near_t[near_t >= start] - start
+    model, _ending = sp.amplitude_run(sp.amplitude_start(ds, start, setup), model_t, setup)
+    model_t = model_t[: len(model)]
+    for k, (mode, color) in enumerate(zip(sp.MODES, ("C0", "C3"))):
+        ax[1].semilogy(start + model_t, np.sqrt(model[:, k + 1]), color=color, ls=":", lw=1.2,
+                       label=f"{mode}, amplitude model (C8)")
+    ax[2].plot(STORED_EPS * (start + model_t), model[:, 0], color="k", lw=1.0,
+               label=rf"amplitude model (C8), $\varepsilon$ = {STORED_EPS:g} m/s")
     ax[1].set(xlabel="t [s]", ylabel="modal amplitude",
               title=rf"its two modes, $\varepsilon$ = {STORED_EPS:g} m/s")
     critical = cs.omega_critical()

@@ -12,7 +12,9 @@ omega_c (C4).
 Where the energy goes (:func:`mode_energetics`): per squared amplitude and averaged over its phase, each mode
 holds the energy kappa above the spin's and costs the friction power pi; the spins' own energy grows as
 A Omega. So, to second order in the amplitudes, A Omega dOmega/dt = sum_k (pi_k - 2 Re lambda_k kappa_k)
-|z_k|^2 (C7): the decaying nutation feeds the spin, the slipping and growing precession drains it.
+``|z_k|^2`` (C7): the decaying nutation feeds the spin, the slipping and growing precession drains it.
+With the two modes' rates this closes into a three-dimensional model of the stay, (C8)
+(:func:`amplitude_system`, :func:`amplitude_start`, :func:`amplitude_run`).
 
 ``passage`` returns the run as a dataset (kind ``spin_passage``) with the amplitudes, the spin, the height of S
 and these events: when S first passes r + 0.8 e (the inversion criterion, ``t_inverted``), when it falls back
@@ -31,6 +33,7 @@ import heyoka as hy
 import numpy as np
 import xarray as xr
 
+from ..dynamics import Event, System
 from ..errors import ParameterError
 from ..models import reduced
 from ..parameters import InitialState, Setup, to_dict
@@ -39,7 +42,7 @@ from . import critical_spin, inversion
 from .stationary import stationary_state
 
 __all__ = ["MODES", "modal_amplitudes", "mode_energetics", "energy_and_power", "modal_friction_power", "passage",
-           "integrated_rate"]
+           "integrated_rate", "amplitude_system", "amplitude_start", "amplitude_run"]
 
 MODES = ("nutation", "precession")  # the slower and the faster pair of the inverted spin (C2)
 NEAR_SPIN = 0.5  # z_S > r + NEAR_SPIN e: the samples split into modes (S well above G)
@@ -80,7 +83,10 @@ def _split(system, x: np.ndarray, spin: float, pars: np.ndarray, setup: Setup) -
 
 
 PHASES = 16  # phases of a mode averaged over in :func:`mode_energetics`
-PROBE = 1e-5  # modal amplitude of the probes in :func:`mode_energetics` (quadratic terms; the error is O(PROBE^2))
+PROBES = {"energy": 1e-3, "power": 1e-5}
+"""Modal amplitudes of the probes in :func:`mode_energetics`: the energy's quadratic term is found to O(1e-6)
+(smaller probes lose it to round-off against E_tot); the power vanishes at the spin, so a small probe keeps
+the ``|slip|^3`` term of (2.29) out of it."""
 
 
 @functools.lru_cache(maxsize=None)
@@ -118,17 +124,123 @@ def mode_energetics(spin: float, setup: Setup | None = None) -> dict[str, float]
                              "pairs (below their collision, 18.28 rad/s for Tables 1-2); give a faster spin")
     phases = np.exp(2j * math.pi * np.arange(PHASES) / PHASES)
     out = {}
+    spin_energy = energy_and_power(spin_x, setup)[0]
     for mode, index in zip(MODES, pairs):
-        probes = spin_x[:, None] + 2.0 * PROBE * (phases[None, :] * right[:, index:index + 1]).real  # |z| = PROBE
-        energy, power = energy_and_power(probes, setup)
-        out[f"{mode}_energy"] = float((energy - energy_and_power(spin_x, setup)[0]).mean()) / PROBE**2
-        out[f"{mode}_friction_power"] = float(power.mean()) / PROBE**2
+        probes = {what: spin_x[:, None] + 2.0 * size * (phases[None, :] * right[:, index:index + 1]).real
+                  for what, size in PROBES.items()}  # |z| = size
+        energy = energy_and_power(probes["energy"], setup)[0]
+        power = energy_and_power(probes["power"], setup)[1]
+        out[f"{mode}_energy"] = float((energy - spin_energy).mean()) / PROBES["energy"] ** 2
+        out[f"{mode}_friction_power"] = float(power.mean()) / PROBES["power"] ** 2
         out[f"{mode}_rate"] = float(eigenvalues[index].real)
     step = 1e-4 * spin
     ends = stationary_state("inverted", [spin - step, spin + step])
     low, high = energy_and_power(ends, setup)[0]
     out["spin_energy_slope"] = float(high - low) / (2.0 * step)
     return out
+
+
+AMPLITUDE_SPINS = (22.0, 40.0)  # rad/s: the spins the amplitude model's coefficients are fitted over
+AMPLITUDE_FIT = (37, 12)  # spins sampled, degree of the Chebyshev series of each coefficient
+AMPLITUDE_STATES = ("spin", "nutation_power", "precession_power")  # Omega [rad/s], |z_n|^2, |z_p|^2
+
+
+def amplitude_system(setup: Setup | None = None, spins: tuple = AMPLITUDE_SPINS) -> System:
+    """The stay as a three-dimensional ODE (C8): the spin Omega and the squared amplitudes N = ``|z_n|^2``,
+    P = ``|z_p|^2`` of the inverted spin's nutation and precession, with
+
+        dN/dt = 2 Re lambda_n(Omega) N,   dP/dt = 2 Re lambda_p(Omega) P,
+        A Omega dOmega/dt = (pi_n - 2 Re lambda_n kappa_n) N + (pi_p - 2 Re lambda_p kappa_p) P.
+
+    Assumptions: the state stays near the family of inverted spins (the linear modes describe it), the two
+    modes' phases are averaged over (their frequencies, about 6 and 29 rad/s, are not in resonance), and the
+    spin is defined by the energy partition E = E*(Omega) + kappa_n N + kappa_p P. The coefficients come from
+    :func:`mode_energetics` on ``spins`` (Chebyshev series; the fit is checked at the midpoints and a
+    ParameterError names a misfit); the terminal event ``left_fitted_spins`` ends a run that leaves them. All
+    are O(eps), so in the slow time eps t the model does not depend on eps."""
+    setup = Setup() if setup is None else setup
+    low, high = spins
+    if not (math.isfinite(low) and math.isfinite(high) and low < high):
+        raise ParameterError(f"spins = {spins}: give finite LOW < HIGH in rad/s")
+    count, degree = AMPLITUDE_FIT
+    grid = np.linspace(low, high, count)
+    centre, half = 0.5 * (low + high), 0.5 * (high - low)
+    rows = [mode_energetics(float(w), setup) for w in grid]
+    checks = [mode_energetics(float(w), setup) for w in 0.5 * (grid[1:] + grid[:-1])[::4]]
+
+    def coefficient(row, mode, what):
+        if what == "rate":
+            return row[f"{mode}_rate"]
+        return (row[f"{mode}_friction_power"] - 2.0 * row[f"{mode}_rate"] * row[f"{mode}_energy"]) / (
+            row["spin_energy_slope"])
+
+    spin, nutation, precession = variables = hy.make_vars(*AMPLITUDE_STATES)
+    u = (spin - centre) / half
+    series = {}
+    for mode in MODES:
+        for what in ("rate", "drift"):
+            values = np.array([coefficient(row, mode, what) for row in rows])
+            coefficients = np.polynomial.chebyshev.chebfit((grid - centre) / half, values, degree)
+            midpoints = 0.5 * (grid[1:] + grid[:-1])[::4]
+            misfit = np.abs(np.polynomial.chebyshev.chebval((midpoints - centre) / half, coefficients)
+                            - [coefficient(row, mode, what) for row in checks]).max()
+            if misfit > 1e-3 * np.abs(values).max():
+                raise ParameterError(f"the {mode} {what} of the amplitude model misfits by {misfit:.2g} over "
+                                     f"{low:g}-{high:g} rad/s; give a narrower range of spins")
+            series[mode, what] = _chebyshev_expression(coefficients, u)
+    rhs = [series["nutation", "drift"] * nutation + series["precession", "drift"] * precession,
+           2.0 * series["nutation", "rate"] * nutation, 2.0 * series["precession", "rate"] * precession]
+    leaves = Event("left_fitted_spins", (spin - low) * (high - spin), "negative")  # terminal: no extrapolation
+    return System(f"tippedisk_stay_amplitudes_eps{setup.friction.eps:g}", variables, rhs, {},
+                  state_names=AMPLITUDE_STATES, units={"spin": "rad s-1", "nutation_power": "1",
+                                                       "precession_power": "1"}, time_units="s", events=(leaves,),
+                  description=f"the stay near the inverted spins as amplitudes (C7), {low:g}-{high:g} rad/s")
+
+
+def amplitude_run(start, times, setup: Setup | None = None, system: System | None = None) -> tuple:
+    """Run the amplitude model (C8) of ``setup`` (or ``system``, an :func:`amplitude_system`) from ``start``
+    (spin [rad/s], N, P) over ``times`` [s] (from 0): (states on the times reached, ending "end" or
+    "left_fitted_spins")."""
+    system = amplitude_system(setup) if system is None else system
+    times = np.asarray(times, dtype=float)
+    if not (times.ndim == 1 and times.size and times[0] == 0.0 and np.all(np.diff(times) > 0)):
+        raise ParameterError("times: give increasing times [s] starting at 0")
+    ta = copy.deepcopy(system.taylor(1e-12, events=True))
+    ta.time = 0.0
+    ta.state[:] = np.asarray(start, dtype=float)
+    result = ta.propagate_grid(times)
+    states = np.asarray(result[-1])
+    if not np.all(np.isfinite(states)):
+        raise ParameterError("the amplitude model's run broke down (non-finite state); start nearer the spins")
+    return states, "end" if result[0] == hy.taylor_outcome.time_limit else system.events[0].name
+
+
+def _chebyshev_expression(coefficients, u):
+    """sum c_k T_k(u) as an expression of u (Clenshaw's recurrence)."""
+    b1, b2 = 0.0 * u, 0.0 * u
+    for c in coefficients[:0:-1]:
+        b1, b2 = 2.0 * u * b1 - b2 + float(c), b1
+    return u * b1 - b2 + float(coefficients[0])
+
+
+def amplitude_start(ds: xr.Dataset, time: float, setup: Setup | None = None) -> np.ndarray:
+    """The amplitude model's state at ``time`` [s] of a passage: the squared amplitudes there and the spin left
+    by the energy partition, E*(Omega) = E_tot - kappa_n N - kappa_p P (E* = A Omega^2 / 2 + m g (r + e))."""
+    setup = Setup() if setup is None else setup
+    times = ds.near_time.values
+    if times.size == 0 or not times[0] <= time <= times[-1]:
+        raise ParameterError(f"time = {time} s is not in the passage near the inverted spin; pick one of its times")
+    k = int(np.argmin(np.abs(times - time)))
+    spin = float(ds.spin.values[ds.near_spin.values == 1][k])
+    energetics = mode_energetics(spin, setup)
+    powers = [float(ds[f"{mode}_amplitude"].values[k]) ** 2 for mode in MODES]
+    energy = float(ds.E_tot.values[ds.near_spin.values == 1][k])
+    disk = setup.disk
+    rest = energy - sum(energetics[f"{mode}_energy"] * p for mode, p in zip(MODES, powers)) - (
+        disk.m * setup.gravity * (disk.r + disk.e))
+    if rest <= 0:
+        raise ParameterError(f"at {time} s the modes hold more than the kinetic energy; pick a later time")
+    return np.array([math.sqrt(2.0 * rest / disk.A), *powers])
 
 
 def modal_amplitudes(states: np.ndarray, spins: np.ndarray, setup: Setup | None = None) -> dict[str, np.ndarray]:
