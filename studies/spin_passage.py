@@ -57,7 +57,7 @@ def summary(spin: float, eps: float, ds) -> str:
 
 def energy_check(ds, setup) -> str:
     """The energy the full model loses over a stretch of the stay against the modes' friction power."""
-    times, power = ds.near_time.values, sp.modal_friction_power(ds, setup)
+    times, power = ds.near_time.values, sp.modal_friction_power(ds)
     energy = ds.E_tot.values[ds.near_spin.values == 1]
     t_in, eps = ds.attrs["t_inverted"], setup.friction.eps
     lines = []
@@ -96,7 +96,7 @@ def figure(found: dict, path: Path) -> None:
     setup = inversion.with_eps(None, STORED_EPS)
     start = near_t[np.searchsorted(near_t, ds.attrs["t_inverted"] + MODEL_START / STORED_EPS)]
     model_t = near_t[near_t >= start] - start
-    model, _ending = sp.amplitude_run(sp.amplitude_start(ds, start, setup), model_t, setup)
+    model, _ending = sp.amplitude_run(sp.amplitude_start(ds, start), model_t, setup)
     model_t = model_t[: len(model)]
     for k, (mode, color) in enumerate(zip(sp.MODES, ("C0", "C3"))):
         ax[1].semilogy(start + model_t, np.sqrt(model[:, k + 1]), color=color, ls=":", lw=1.2,

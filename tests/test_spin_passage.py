@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 import pytest
+import xarray as xr
 
 import tippedisk_analysis as td
 from tippedisk_analysis import dynamics as dy
@@ -77,6 +78,12 @@ def test_friction_takes_what_the_modes_dissipate_and_the_nutation_gives_its_ener
     assert np.trapezoid(power, times) == pytest.approx(lost, rel=1e-4)  # dE/dt is the friction power
     coefficients = sp.mode_energetics(spin, setup)
     assert np.trapezoid(coefficients[f"{mode}_friction_power"] * z**2, times) == pytest.approx(lost, rel=0.03)
+    # the spin offset: alpha_dot exceeds omega_x by c |z|^2 on average (first three periods of the mode)
+    pars = inversion.parameters("smooth", setup)
+    vertical = reduced.system().observe(states.T, pars)["alpha_dot"]
+    first = slice(0, int(round(3 * 2 * math.pi / cs.rates(spin)[f"nu_{mode}"] / (times[1] - times[0]))))
+    offset = coefficients[f"{mode}_spin_offset"] * (z[first] ** 2).mean()
+    assert (vertical[first] - states[first, 4]).mean() == pytest.approx(offset, rel=0.05)  # measured 0.2 %, 3.7 %
     mode_energy_change = coefficients[f"{mode}_energy"] * (z[-1] ** 2 - z[0] ** 2)
     if mode == "nutation":
         assert mode_energy_change < 10 * lost < 0  # measured -5.2e-7 J against -3.6e-8 J
@@ -101,7 +108,7 @@ def test_after_the_inversion_the_precession_grows_the_nutation_decays_and_the_di
     nutation, precession = ds.nutation_amplitude.values, ds.precession_amplitude.values
     assert precession[-1] > 5 * precession[0] and nutation.min() < 0.3 * nutation[0]  # 0.17 -> 2.7, 11.9 -> 2.4
     spins = ds.spin.values[ds.near_spin.values == 1]
-    assert spins[-1] < cs.omega_critical().omega_critical < spins[0]  # 32.7 -> 27.5 rad/s
+    assert spins[-1] < cs.omega_critical().omega_critical < spins[0]  # 32.66 -> 24.84 rad/s
     for mode in sp.MODES:  # the linear rates along the passage, to its finite amplitudes (10-20 %)
         measured, predicted = sp.integrated_rate(ds, mode, t_in + 10.0, t_in + 50.0)
         assert measured == pytest.approx(predicted, rel=0.3), mode
@@ -112,7 +119,7 @@ def test_the_modes_friction_explains_the_energy_lost_early_in_the_stay():
     """eps 0.01, 36 rad/s: from 2 s to 35 s after the inversion the full model loses 4.688e-3 J, the modes'
     phase-averaged friction power 4.679e-3 J (0.2 %); later, at larger precession amplitude, it explains less."""
     ds, setup = passage(0.01), setup_at(0.01)
-    times, power = ds.near_time.values, sp.modal_friction_power(ds, setup)
+    times, power = ds.near_time.values, sp.modal_friction_power(ds)
     energy = ds.E_tot.values[ds.near_spin.values == 1]
     t_in = ds.attrs["t_inverted"]
     window = np.flatnonzero((times >= t_in + 2.0) & (times <= t_in + 35.0))
@@ -134,17 +141,23 @@ def test_the_amplitude_model_in_slow_time_does_not_depend_on_eps():
 
 
 @pytest.mark.slow
-def test_the_amplitude_model_follows_the_stay_for_a_slow_time_of_a_tenth():
-    """From eps t = 0.35 m after the inversion (eps 0.01, 36 rad/s), 0.1 m later: the spin within 0.3 rad/s of
-    the full model's (energy partition; measured 0.07) and the amplitudes within 25 % (measured 11 % and 5 %)."""
-    ds, setup = passage(0.01), setup_at(0.01)
-    t0 = ds.attrs["t_inverted"] + 35.0
-    t1 = ds.near_time.values[np.argmin(np.abs(ds.near_time.values - (t0 + 10.0)))]
-    t0 = ds.near_time.values[np.argmin(np.abs(ds.near_time.values - t0))]
-    model = sp.amplitude_run(sp.amplitude_start(ds, t0, setup), np.array([0.0, t1 - t0]), setup)[0][-1]
-    full = sp.amplitude_start(ds, t1, setup)
-    assert abs(model[0] - full[0]) < 0.3
-    assert np.allclose(np.sqrt(model[1:]), np.sqrt(full[1:]), rtol=0.25)
+def test_the_amplitude_model_follows_the_stay():
+    """From 10 s to 35 s after the inversion (eps 0.01, 36 rad/s): the mean spin about the vertical falls by
+    0.812 rad/s in (C8) and by 0.796 rad/s in ODE Model 1 (mean over 2 s); Omega (the energy partition's) ends
+    0.01 rad/s apart, the amplitudes 10 % and 11 % (measured)."""
+    ds = passage(0.01)
+    times, t_in = ds.near_time.values, ds.attrs["t_inverted"]
+    t0, t1 = (times[np.argmin(np.abs(times - (t_in + dt)))] for dt in (10.0, 35.0))
+    system = sp.amplitude_system(setup_at(0.01))
+    states, ending = sp.amplitude_run(sp.amplitude_start(ds, t0), np.array([0.0, t1 - t0]), system=system)
+    assert ending == "end"
+    vertical = system.observe(states.T, np.array([]))["alpha_dot_mean"]
+    spins = ds.spin.values[ds.near_spin.values == 1]
+    measured = spins[np.abs(times - t1) <= 1.0].mean() - spins[np.abs(times - t0) <= 1.0].mean()
+    assert vertical[-1] - vertical[0] == pytest.approx(measured, rel=0.15)
+    full = sp.amplitude_start(ds, t1)
+    assert abs(states[-1][0] - full[0]) < 0.2
+    assert np.allclose(np.sqrt(states[-1][1:]), np.sqrt(full[1:]), rtol=0.2)
 
 
 @pytest.mark.slow
@@ -176,6 +189,23 @@ def test_a_disk_that_lifts_off_before_it_inverts_is_undecided_not_a_no():
     assert "decides nothing" in ds.attrs["message"]
 
 
+def test_a_lift_off_after_the_inversion_leaves_the_passage_undecided():
+    """A disk that lifts off 0.4 s after S passed r + 0.8 e: the passage did not reach its end."""
+    setup = inversion.with_eps(Setup(disk=Disk.from_geometry(r=0.05).with_eccentricity(0.0034)), 0.1)
+    ds = sp.passage(48.0, setup=setup, slow_time=2.0)
+    assert ds.attrs["t_inverted"] != sp.NONE and ds.attrs["ending"] == "lift_off"
+    assert ds.attrs["status"] == "undecided" and "after S passed" in ds.attrs["message"]
+
+
+def test_the_modes_are_matched_to_the_rolling_frequencies_or_refused():
+    """At 100 rad/s and eps 0.1 friction has made the rolling nutation a real pair: no pair is labelled
+    nutation (the least damped complex pair there is a slip mode)."""
+    with pytest.raises(ParameterError, match="friction has changed the modes"):
+        sp.mode_energetics(100.0, setup_at(0.1))
+    with pytest.raises(ParameterError, match="e = 0"):
+        sp.mode_energetics(32.0, Setup(disk=Disk().with_eccentricity(0.0)))
+
+
 def test_bad_arguments_are_one_line_errors():
     with pytest.raises(ParameterError, match="slow_time"):
         sp.passage(36.0, slow_time=-1.0)
@@ -185,10 +215,23 @@ def test_bad_arguments_are_one_line_errors():
         sp.mode_energetics(float("nan"))
     with pytest.raises(ParameterError, match="LOW < HIGH"):
         sp.amplitude_system(spins=(40.0, 22.0))
-    states, ending = sp.amplitude_run([30.34, 58.2, 0.07], np.linspace(0.0, 60.0, 61), setup_at(0.01))
+    states, ending = sp.amplitude_run([23.0, 50.0, 1.0], np.linspace(0.0, 60.0, 61), setup_at(0.01))
     assert ending == "left_fitted_spins" and len(states) < 61 and states[-1][0] > 21.9  # no extrapolation
     with pytest.raises(ParameterError, match="not in the passage"):
         sp.amplitude_start(passage(0.02), 1.0)
+    with pytest.raises(ParameterError, match="give states"):
+        sp.modal_amplitudes(np.zeros((10, 7)), np.full(5, 32.0))
+    with pytest.raises(ParameterError, match="samples"):
+        sp.passage(36.0, slow_time=1e12)
+    with pytest.raises(ParameterError, match="tol"):
+        sp.passage(36.0, tol=-1.0)
+    with pytest.raises(ParameterError, match="n_spins"):
+        sp.modal_friction_power(passage(0.02), n_spins=0)
+    with pytest.raises(ParameterError, match="fewer than two samples"):
+        t0 = passage(0.02).attrs["t_inverted"] + 5.0
+        sp.integrated_rate(passage(0.02), "nutation", t0, t0 + 0.01)
+    with pytest.raises(ParameterError, match="not a passage dataset"):
+        sp.passage_setup(xr.Dataset(attrs={"kind": "simulation"}))
     with pytest.raises(ParameterError, match="unknown mode"):
         sp.integrated_rate(passage(0.02), "wobble", 10.0, 20.0)
     with pytest.raises(ParameterError, match="not inside the passage"):

@@ -10,11 +10,12 @@ the integral of Re lambda(alpha_dot(t)) dt, and the nutation's amplitude is smal
 omega_c (C4).
 
 Where the energy goes (:func:`mode_energetics`): per squared amplitude and averaged over its phase, each mode
-holds the energy kappa above the spin's and costs the friction power pi; the spins' own energy grows as
-A Omega. So, to second order in the amplitudes, A Omega dOmega/dt = sum_k (pi_k - 2 Re lambda_k kappa_k)
-``|z_k|^2`` (C7): the decaying nutation feeds the spin, the slipping and growing precession drains it.
-With the two modes' rates this closes into a three-dimensional model of the stay, (C8)
-(:func:`amplitude_system`, :func:`amplitude_start`, :func:`amplitude_run`).
+holds the energy kappa above the spin's, costs the friction power pi and raises the mean spin about the
+vertical above the mean body rate omega_x by c; the spins' own energy grows as A Omega. So, to second order
+in the amplitudes and with Omega the mean omega_x, A Omega dOmega/dt = sum_k (pi_k - 2 Re lambda_k kappa_k)
+``|z_k|^2`` and <alpha_dot> = Omega + sum_k c_k ``|z_k|^2`` (C7). With the two modes' rates this closes into a
+three-dimensional model of the stay, (C8) (:func:`amplitude_system`, :func:`amplitude_start`,
+:func:`amplitude_run`).
 
 ``passage`` returns the run as a dataset (kind ``spin_passage``) with the amplitudes, the spin, the height of S
 and these events: when S first passes r + 0.8 e (the inversion criterion, ``t_inverted``), when it falls back
@@ -27,6 +28,7 @@ from __future__ import annotations
 
 import copy
 import functools
+import json
 import math
 
 import heyoka as hy
@@ -36,46 +38,62 @@ import xarray as xr
 from ..dynamics import Event, System
 from ..errors import ParameterError
 from ..models import reduced
-from ..parameters import InitialState, Setup, to_dict
+from ..parameters import InitialState, Setup, setup_from_dict, to_dict
 from ..results import flat_parameters, make_attrs
 from . import critical_spin, inversion
 from .stationary import stationary_state
 
-__all__ = ["MODES", "modal_amplitudes", "mode_energetics", "energy_and_power", "modal_friction_power", "passage",
+__all__ = ["passage_setup", "MODES", "modal_amplitudes", "mode_energetics", "energy_and_power", "modal_friction_power", "passage",
            "integrated_rate", "amplitude_system", "amplitude_start", "amplitude_run"]
 
 MODES = ("nutation", "precession")  # the slower and the faster pair of the inverted spin (C2)
 NEAR_SPIN = 0.5  # z_S > r + NEAR_SPIN e: the samples split into modes (S well above G)
 SAMPLE_STEP = 0.05  # s, between samples (the nutation period is about 1 s)
 NONE = -1.0  # t_inverted, t_fell_back [s] of a run in which it did not happen
+MAX_SAMPLES = 2e6  # samples of one passage (16 s of ODE Model 1 states per 1e5)
 
 
-def _slow_pairs(eigenvalues: np.ndarray) -> tuple[int, int] | None:
-    """Indices of the nutation and precession eigenvalues (upper half plane): of the pairs with Im > 0, the two
-    least damped (the slip modes decay at O(1/eps)), slower first; None with fewer than two such pairs."""
-    upper = np.flatnonzero(eigenvalues.imag > 1e-9)
-    if upper.size < 2:
-        return None
-    slow = upper[np.argsort(np.abs(eigenvalues[upper].real))[:2]]
-    return tuple(slow[np.argsort(eigenvalues[slow].imag)])
+MATCH = 0.25  # a pair is a rolling mode when its frequency lies within this fraction of (C2)'s
 
 
-def _split(system, x: np.ndarray, spin: float, pars: np.ndarray, setup: Setup) -> dict | None:
-    """One state's modal amplitudes, rates and frequencies about the inverted spin at ``spin``; None where the
-    rolling spin there does not have two elliptic pairs (below their collision, (C2)), so that no pair is the
-    nutation or the precession."""
-    if math.isnan(critical_spin.rates(spin, setup.disk, setup.gravity, setup.friction.mu)["nu_nutation"]):
-        return None
+def _modes(system, spin: float, pars: np.ndarray, setup: Setup):
+    """(spin state, eigenvalues, right eigenvectors, {mode: index}) of the inverted spin at ``spin`` [rad/s]:
+    the pairs (upper half plane) whose frequencies match the rolling nutation and precession of (C2). A
+    ParameterError where there is no such pair: below the collision of the rolling pairs, or at an eps so large
+    for this spin that friction has changed them beyond recognition."""
+    if not math.isfinite(spin):
+        raise ParameterError(f"spin = {spin!r}: give a finite spin in rad/s")
+    if setup.disk.e <= 0:
+        raise ParameterError("e = 0: a balanced disk has no inverted spin to split into modes; give e > 0 [m]")
+    rolling = critical_spin.rates(spin, setup.disk, setup.gravity, setup.friction.mu)
+    if math.isnan(rolling["nu_nutation"]):
+        raise ParameterError(f"at {spin:.4g} rad/s the rolling inverted spin has no nutation and precession pairs "
+                             "(below their collision, 18.28 rad/s for Tables 1-2); give a faster spin")
     spin_x = stationary_state("inverted", [spin])[:, 0]
     eigenvalues, right = np.linalg.eig(system.jacobian(spin_x, pars))
-    pairs = _slow_pairs(eigenvalues)
-    if pairs is None:
-        return None
+    upper = np.flatnonzero(eigenvalues.imag > 1e-9)
+    found = {}
+    for mode in MODES:
+        nu = rolling[f"nu_{mode}"]
+        k = upper[np.argmin(np.abs(eigenvalues[upper].imag - nu))] if upper.size else None
+        if k is None or abs(eigenvalues[k].imag - nu) > MATCH * nu:
+            raise ParameterError(f"at {spin:.4g} rad/s and eps = {setup.friction.eps:g} m/s no pair of the inverted "
+                                 f"spin has the rolling {mode}'s frequency {nu:.4g} rad/s (C2): friction has changed "
+                                 "the modes; give a smaller eps")
+        found[mode] = int(k)
+    if found["nutation"] == found["precession"]:
+        raise ParameterError(f"at {spin:.4g} rad/s the nutation and precession cannot be told apart; give a faster spin")
+    return spin_x, eigenvalues, right, found
+
+
+def _split(system, x: np.ndarray, spin: float, pars: np.ndarray, setup: Setup) -> dict:
+    """One state's modal amplitudes, rates and frequencies about the inverted spin at ``spin``."""
+    spin_x, eigenvalues, right, pairs = _modes(system, spin, pars, setup)
     left = np.linalg.inv(right)
     d = x - spin_x
     d[1] = math.remainder(d[1], 2.0 * math.pi)  # gamma, about pi/2
     out = {}
-    for mode, index in zip(MODES, pairs):
+    for mode, index in pairs.items():
         out[f"{mode}_amplitude"] = abs(left[index] @ d)
         out[f"{mode}_rate"] = eigenvalues[index].real
         out[f"{mode}_frequency"] = eigenvalues[index].imag
@@ -110,28 +128,24 @@ def mode_energetics(spin: float, setup: Setup | None = None) -> dict[str, float]
     """What each mode of the inverted spin at ``spin`` [rad/s] holds and costs, per squared modal amplitude
     ``|z|^2`` (z: the coordinate of :func:`modal_amplitudes`), averaged over the mode's phase:
     "<mode>_energy" [J] (E_tot above the spin's), "<mode>_friction_power" [W] (mean dE/dt: friction's work,
-    <= 0) and "<mode>_rate" [1/s] (Re lambda); "spin_energy_slope" dE*/dOmega [J s] of the spins themselves."""
+    <= 0), "<mode>_spin_offset" [rad/s] (the mean spin about the vertical alpha_dot above the mode's mean
+    omega_x, which the probes keep at ``spin``) and "<mode>_rate" [1/s] (Re lambda); "spin_energy_slope"
+    dE*/dOmega [J s] of the spins themselves."""
     setup = Setup() if setup is None else setup
-    if not math.isfinite(spin):
-        raise ParameterError(f"spin = {spin!r}: give a finite spin in rad/s")
     system, pars = reduced.system(), inversion.parameters("smooth", setup)
-    spin_x = stationary_state("inverted", [spin])[:, 0]
-    eigenvalues, right = np.linalg.eig(system.jacobian(spin_x, pars))
-    pairs = _slow_pairs(eigenvalues)
-    if pairs is None or math.isnan(critical_spin.rates(spin, setup.disk, setup.gravity,
-                                                       setup.friction.mu)["nu_nutation"]):
-        raise ParameterError(f"at {spin:.4g} rad/s the rolling inverted spin has no nutation and precession "
-                             "pairs (below their collision, 18.28 rad/s for Tables 1-2); give a faster spin")
+    spin_x, eigenvalues, right, pairs = _modes(system, spin, pars, setup)
     phases = np.exp(2j * math.pi * np.arange(PHASES) / PHASES)
     out = {}
     spin_energy = energy_and_power(spin_x, setup)[0]
-    for mode, index in zip(MODES, pairs):
+    for mode, index in pairs.items():
         probes = {what: spin_x[:, None] + 2.0 * size * (phases[None, :] * right[:, index:index + 1]).real
-                  for what, size in PROBES.items()}  # |z| = size
+                  for what, size in PROBES.items()}  # |z| = size; the mean of omega_x stays at spin
         energy = energy_and_power(probes["energy"], setup)[0]
         power = energy_and_power(probes["power"], setup)[1]
+        vertical = system.observe(probes["energy"], pars)["alpha_dot"]
         out[f"{mode}_energy"] = float((energy - spin_energy).mean()) / PROBES["energy"] ** 2
         out[f"{mode}_friction_power"] = float(power.mean()) / PROBES["power"] ** 2
+        out[f"{mode}_spin_offset"] = float((np.asarray(vertical) - spin).mean()) / PROBES["energy"] ** 2
         out[f"{mode}_rate"] = float(eigenvalues[index].real)
     step = 1e-4 * spin
     ends = stationary_state("inverted", [spin - step, spin + step])
@@ -142,22 +156,27 @@ def mode_energetics(spin: float, setup: Setup | None = None) -> dict[str, float]
 
 AMPLITUDE_SPINS = (22.0, 40.0)  # rad/s: the spins the amplitude model's coefficients are fitted over
 AMPLITUDE_FIT = (37, 12)  # spins sampled, degree of the Chebyshev series of each coefficient
+RATES_AT = "vertical"  # the rates are evaluated at the mean vertical spin (or "omega_x": at Omega; see (C8))
 AMPLITUDE_STATES = ("spin", "nutation_power", "precession_power")  # Omega [rad/s], |z_n|^2, |z_p|^2
 
 
 def amplitude_system(setup: Setup | None = None, spins: tuple = AMPLITUDE_SPINS) -> System:
-    """The stay as a three-dimensional ODE (C8): the spin Omega and the squared amplitudes N = ``|z_n|^2``,
-    P = ``|z_p|^2`` of the inverted spin's nutation and precession, with
+    """The stay as a three-dimensional ODE (C8): Omega, the body rate omega_x averaged over the modes' phases
+    (the family coordinate of the inverted spins), and the squared amplitudes N = ``|z_n|^2``, P = ``|z_p|^2``
+    of their nutation and precession, with
 
-        dN/dt = 2 Re lambda_n(Omega) N,   dP/dt = 2 Re lambda_p(Omega) P,
-        A Omega dOmega/dt = (pi_n - 2 Re lambda_n kappa_n) N + (pi_p - 2 Re lambda_p kappa_p) P.
+        dN/dt = 2 Re lambda_n(W) N,   dP/dt = 2 Re lambda_p(W) P,
+        A Omega dOmega/dt = (pi_n - 2 Re lambda_n kappa_n) N + (pi_p - 2 Re lambda_p kappa_p) P,
 
-    Assumptions: the state stays near the family of inverted spins (the linear modes describe it), the two
-    modes' phases are averaged over (their frequencies, about 6 and 29 rad/s, are not in resonance), and the
-    spin is defined by the energy partition E = E*(Omega) + kappa_n N + kappa_p P. The coefficients come from
-    :func:`mode_energetics` on ``spins`` (Chebyshev series; the fit is checked at the midpoints and a
-    ParameterError names a misfit); the terminal event ``left_fitted_spins`` ends a run that leaves them. All
-    are O(eps), so in the slow time eps t the model does not depend on eps."""
+    W = Omega + c_n N + c_p P the mean spin about the vertical (observable ``alpha_dot_mean``; c: the modes'
+    spin offsets of :func:`mode_energetics`). Assumptions: the state stays near the family of inverted spins
+    (the linear modes describe it); the two modes' phases are averaged over (their frequencies, about 6 and
+    29 rad/s, are not in resonance); Omega is what the energy partition E = E*(Omega) + kappa_n N + kappa_p P
+    leaves; the rates are taken at W (RATES_AT). To second order in the amplitudes that last choice does not
+    matter; at the stay's amplitudes it does, and W is the one that follows ODE Model 1 (docs/inversion.md).
+    The coefficients come from :func:`mode_energetics` on ``spins`` (Chebyshev series; the fit is checked at the
+    midpoints and a ParameterError names a misfit); the terminal event ``left_fitted_spins`` ends a run that
+    leaves them. All are O(eps), so in the slow time eps t the model does not depend on eps."""
     setup = Setup() if setup is None else setup
     low, high = spins
     if not (math.isfinite(low) and math.isfinite(high) and low < high):
@@ -169,16 +188,16 @@ def amplitude_system(setup: Setup | None = None, spins: tuple = AMPLITUDE_SPINS)
     checks = [mode_energetics(float(w), setup) for w in 0.5 * (grid[1:] + grid[:-1])[::4]]
 
     def coefficient(row, mode, what):
-        if what == "rate":
-            return row[f"{mode}_rate"]
+        if what in ("rate", "spin_offset"):
+            return row[f"{mode}_{what}"]
         return (row[f"{mode}_friction_power"] - 2.0 * row[f"{mode}_rate"] * row[f"{mode}_energy"]) / (
             row["spin_energy_slope"])
 
     spin, nutation, precession = variables = hy.make_vars(*AMPLITUDE_STATES)
     u = (spin - centre) / half
-    series = {}
+    fits = {}
     for mode in MODES:
-        for what in ("rate", "drift"):
+        for what in ("rate", "drift", "spin_offset"):
             values = np.array([coefficient(row, mode, what) for row in rows])
             coefficients = np.polynomial.chebyshev.chebfit((grid - centre) / half, values, degree)
             midpoints = 0.5 * (grid[1:] + grid[:-1])[::4]
@@ -187,13 +206,18 @@ def amplitude_system(setup: Setup | None = None, spins: tuple = AMPLITUDE_SPINS)
             if misfit > 1e-3 * np.abs(values).max():
                 raise ParameterError(f"the {mode} {what} of the amplitude model misfits by {misfit:.2g} over "
                                      f"{low:g}-{high:g} rad/s; give a narrower range of spins")
-            series[mode, what] = _chebyshev_expression(coefficients, u)
+            fits[mode, what] = coefficients
+    offset = {mode: _chebyshev_expression(fits[mode, "spin_offset"], u) for mode in MODES}
+    vertical = spin + offset["nutation"] * nutation + offset["precession"] * precession
+    at = {"omega_x": u, "vertical": (vertical - centre) / half}[RATES_AT]
+    series = {(mode, what): _chebyshev_expression(fits[mode, what], at) for mode in MODES for what in ("rate", "drift")}
     rhs = [series["nutation", "drift"] * nutation + series["precession", "drift"] * precession,
            2.0 * series["nutation", "rate"] * nutation, 2.0 * series["precession", "rate"] * precession]
     leaves = Event("left_fitted_spins", (spin - low) * (high - spin), "negative")  # terminal: no extrapolation
     return System(f"tippedisk_stay_amplitudes_eps{setup.friction.eps:g}", variables, rhs, {},
                   state_names=AMPLITUDE_STATES, units={"spin": "rad s-1", "nutation_power": "1",
                                                        "precession_power": "1"}, time_units="s", events=(leaves,),
+                  observables={"alpha_dot_mean": (vertical, "rad s-1")},
                   description=f"the stay near the inverted spins as amplitudes (C7), {low:g}-{high:g} rad/s")
 
 
@@ -223,10 +247,10 @@ def _chebyshev_expression(coefficients, u):
     return u * b1 - b2 + float(coefficients[0])
 
 
-def amplitude_start(ds: xr.Dataset, time: float, setup: Setup | None = None) -> np.ndarray:
+def amplitude_start(ds: xr.Dataset, time: float) -> np.ndarray:
     """The amplitude model's state at ``time`` [s] of a passage: the squared amplitudes there and the spin left
     by the energy partition, E*(Omega) = E_tot - kappa_n N - kappa_p P (E* = A Omega^2 / 2 + m g (r + e))."""
-    setup = Setup() if setup is None else setup
+    setup = passage_setup(ds)
     times = ds.near_time.values
     if times.size == 0 or not times[0] <= time <= times[-1]:
         raise ParameterError(f"time = {time} s is not in the passage near the inverted spin; pick one of its times")
@@ -248,16 +272,14 @@ def modal_amplitudes(states: np.ndarray, spins: np.ndarray, setup: Setup | None 
     at their own spins alpha_dot (N,) [rad/s], with their eigenvalues there: {"<mode>_amplitude",
     "<mode>_rate" (Re lambda, 1/s), "<mode>_frequency" (Im lambda, rad/s)}."""
     setup = Setup() if setup is None else setup
+    states, spins = np.asarray(states, dtype=float), np.atleast_1d(np.asarray(spins, dtype=float))
+    if states.ndim != 2 or states.shape[1] != reduced.N_STATE or spins.shape != (len(states),):
+        raise ParameterError(f"states of shape {states.shape} and spins of shape {spins.shape}: give states (N, "
+                             f"{reduced.N_STATE}), one per row, and N spins")
     if not (np.all(np.isfinite(states)) and np.all(np.isfinite(spins))):
         raise ParameterError("states and spins must be finite numbers")
     system, pars = reduced.system(), inversion.parameters("smooth", setup)
-    rows = []
-    for x, spin in zip(states, spins):
-        row = _split(system, x, spin, pars, setup)
-        if row is None:
-            raise ParameterError(f"at {spin:.4g} rad/s the rolling inverted spin has no nutation and precession "
-                                 "pairs (below their collision, 18.28 rad/s for Tables 1-2); give faster spins")
-        rows.append(row)
+    rows = [_split(system, x, spin, pars, setup) for x, spin in zip(states, spins)]
     keys = [f"{mode}_{what}" for mode in MODES for what in ("amplitude", "rate", "frequency")]
     return {k: np.array([row[k] for row in rows], dtype=float) for k in keys}
 
@@ -267,14 +289,20 @@ def passage(spin: float, *, setup: Setup | None = None, gamma0: float | None = N
     """Run ODE Model 1 from Table 3's start at initial spin ``spin`` [rad/s] for ``slow_time`` / eps [s] (or
     until it falls or lifts off) and split the samples near the inverted spin into its modes
     (:func:`modal_amplitudes`). Status ``completed`` when the run reached its end; ``not_inverted`` when S never
-    passed r + 0.8 e (no passage to split); ``undecided`` when C1 lifted off before that (the bilateral model
-    decides nothing); ``nonfinite`` when the integration broke down (ending nonfinite; its finite samples are
+    passed r + 0.8 e (no passage to split); ``undecided`` when C1 lifted off (the bilateral model decides
+    nothing from there, so the passage did not reach its end); ``nonfinite`` when the integration broke down (ending nonfinite; its finite samples are
     kept)."""
     setup = Setup() if setup is None else setup
     gamma0 = InitialState().gamma if gamma0 is None else float(gamma0)
     inversion.check_start(setup, gamma0)
     if not (math.isfinite(slow_time) and slow_time > 0):
         raise ParameterError(f"slow_time = {slow_time!r} (eps * t, m): give a positive number, e.g. 3")
+    if not (math.isfinite(tol) and 0 < tol < 1e-3):
+        raise ParameterError(f"tol = {tol!r}: give a Taylor tolerance between 0 and 1e-3 (default 1e-10)")
+    if slow_time / setup.friction.eps / SAMPLE_STEP > MAX_SAMPLES:
+        raise ParameterError(f"slow_time = {slow_time:g} m is {slow_time / setup.friction.eps:.3g} s at eps = "
+                             f"{setup.friction.eps:g} m/s, more than {MAX_SAMPLES:.0e} samples; give a slow time of a "
+                             "few metres (the stay lasts about 1)")
     eps, disk = setup.friction.eps, setup.disk
     system = reduced.system()
     pars = inversion.parameters("smooth", setup)
@@ -300,17 +328,16 @@ def passage(spin: float, *, setup: Setup | None = None, gamma0: float | None = N
     near = (height > NEAR_SPIN) & (times >= t_inverted) & ((times < t_back) if back.size else True) & bool(up.size)
     rows = {}
     for k in np.flatnonzero(near):
-        row = _split(system, states[k], spins[k], pars, setup)
-        if row is None:  # a spin below the collision of the pairs: no modes to split into
+        try:
+            rows[k] = _split(system, states[k], spins[k], pars, setup)
+        except ParameterError:  # no nutation and precession at this spin (below their collision, or eps too large)
             near[k] = False
-        else:
-            rows[k] = row
     keys = [f"{mode}_{what}" for mode in MODES for what in ("amplitude", "rate", "frequency")]
     modes = {key: np.array([rows[k][key] for k in sorted(rows)], dtype=float) for key in keys} if rows else {}
     info = dict(initial_spin=float(spin), gamma0=gamma0, ending=ending, t_end=float(times[-1]),
                 t_inverted=float(t_inverted), t_fell_back=float(t_back))
-    status = ("nonfinite" if ending == "nonfinite" else "completed" if up.size else
-              "undecided" if ending == "lift_off" else "not_inverted")
+    status = ("nonfinite" if ending == "nonfinite" else "undecided" if ending == "lift_off" else
+              "completed" if up.size else "not_inverted")
     return _dataset(times, height, spins, np.asarray(observed["E_tot"]), near, modes, setup, status, info)
 
 
@@ -350,8 +377,9 @@ def _dataset(times, height, spins, energy, near, modes, setup, status, info) -> 
                 "did not fall back below G")
         message = f"S passed r + {inversion.INVERSION_HEIGHT:g} e at {info['t_inverted']:.2f} s, {back}; {ending}"
     elif status == "undecided":
-        message = (f"C1 lifted off before S passed r + {inversion.INVERSION_HEIGHT:g} e, at {info['t_end']:.2f} s: "
-                   "the bilateral model decides nothing there")
+        before = "after" if info["t_inverted"] != NONE else "before"
+        message = (f"C1 lifted off at {info['t_end']:.2f} s, {before} S passed r + {inversion.INVERSION_HEIGHT:g} e: "
+                   "the bilateral model decides nothing from there")
     else:
         message = f"S never passed r + {inversion.INVERSION_HEIGHT:g} e; {ending}"
     ds.attrs = make_attrs("spin_passage", config, status, message, model=reduced.system().name,
@@ -359,11 +387,20 @@ def _dataset(times, height, spins, energy, near, modes, setup, status, info) -> 
     return ds
 
 
-def modal_friction_power(ds: xr.Dataset, setup: Setup | None = None, n_spins: int = 25) -> np.ndarray:
+def passage_setup(ds: xr.Dataset) -> Setup:
+    """The :class:`Setup` a passage dataset was run with (its ``config``)."""
+    if ds.attrs.get("kind") != "spin_passage":
+        raise ParameterError(f"not a passage dataset (kind {ds.attrs.get('kind')!r}); give one of spin_passage.passage")
+    return setup_from_dict(json.loads(ds.attrs["config"])["setup"])
+
+
+def modal_friction_power(ds: xr.Dataset, n_spins: int = 25) -> np.ndarray:
     """The friction power [W] of a passage's modes along dim ``near``: sum over the modes of
     "<mode>_friction_power" (:func:`mode_energetics`, on ``n_spins`` spins over the passage, interpolated) times
     the squared amplitude. Against the run's own dE/dt it says how much of the loss the linear modes explain."""
-    setup = Setup() if setup is None else setup
+    setup = passage_setup(ds)
+    if not (isinstance(n_spins, int) and n_spins >= 2):
+        raise ParameterError(f"n_spins = {n_spins!r}: give an integer of at least 2")
     spins = ds.spin.values[ds.near_spin.values == 1]
     if spins.size == 0:
         raise ParameterError("the passage has no samples near the inverted spin (the start did not invert)")
@@ -385,6 +422,9 @@ def integrated_rate(ds: xr.Dataset, mode: str, t0: float, t1: float) -> tuple[fl
         raise ParameterError(f"give finite times t0 < t1 [s], not [{t0}, {t1}]")
     times = ds.near_time.values
     inside = (times >= t0) & (times <= t1)
+    if inside.sum() == 1 or (inside.sum() == 0 and times.size and times[0] <= t0 and t1 <= times[-1]):
+        raise ParameterError(f"[{t0:g}, {t1:g}] s holds fewer than two samples ({SAMPLE_STEP:g} s apart); give a "
+                             "longer window")
     if inside.sum() < 2 or not np.all(np.diff(np.flatnonzero(inside)) == 1) or (
             np.any(np.diff(times[inside]) > 1.5 * SAMPLE_STEP)):
         breaks = np.flatnonzero(np.diff(times) > 1.5 * SAMPLE_STEP)
