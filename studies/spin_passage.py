@@ -96,13 +96,15 @@ def figure(found: dict, path: Path) -> None:
     setup = inversion.with_eps(None, STORED_EPS)
     start = near_t[np.searchsorted(near_t, ds.attrs["t_inverted"] + MODEL_START / STORED_EPS)]
     model_t = near_t[near_t >= start] - start
-    model, _ending = sp.amplitude_run(sp.amplitude_start(ds, start), model_t, setup)
+    system = sp.amplitude_system(setup)
+    model, _ending = sp.amplitude_run(sp.amplitude_start(ds, start), model_t, system=system)
     model_t = model_t[: len(model)]
+    vertical = system.observe(model.T, np.array([]))["alpha_dot_mean"]
     for k, (mode, color) in enumerate(zip(sp.MODES, ("C0", "C3"))):
         ax[1].semilogy(start + model_t, np.sqrt(model[:, k + 1]), color=color, ls=":", lw=1.2,
                        label=f"{mode}, amplitude model (C8)")
-    ax[2].plot(STORED_EPS * (start + model_t), model[:, 0], color="k", lw=1.0,
-               label=rf"amplitude model (C8), $\varepsilon$ = {STORED_EPS:g} m/s")
+    ax[2].plot(STORED_EPS * (start + model_t), vertical, color="k", lw=1.0,
+               label=rf"(C8): mean vertical spin W, $\varepsilon$ = {STORED_EPS:g} m/s")
     ax[1].set(xlabel="t [s]", ylabel="modal amplitude",
               title=rf"its two modes, $\varepsilon$ = {STORED_EPS:g} m/s")
     critical = cs.omega_critical()

@@ -83,7 +83,7 @@ def test_friction_takes_what_the_modes_dissipate_and_the_nutation_gives_its_ener
     vertical = reduced.system().observe(states.T, pars)["alpha_dot"]
     first = slice(0, int(round(3 * 2 * math.pi / cs.rates(spin)[f"nu_{mode}"] / (times[1] - times[0]))))
     offset = coefficients[f"{mode}_spin_offset"] * (z[first] ** 2).mean()
-    assert (vertical[first] - states[first, 4]).mean() == pytest.approx(offset, rel=0.05)  # measured 0.2 %, 3.7 %
+    assert (vertical[first] - states[first, 4]).mean() == pytest.approx(offset, rel=0.05)  # measured 0.02 %, 0.7 %
     mode_energy_change = coefficients[f"{mode}_energy"] * (z[-1] ** 2 - z[0] ** 2)
     if mode == "nutation":
         assert mode_energy_change < 10 * lost < 0  # measured -5.2e-7 J against -3.6e-8 J
@@ -143,8 +143,8 @@ def test_the_amplitude_model_in_slow_time_does_not_depend_on_eps():
 @pytest.mark.slow
 def test_the_amplitude_model_follows_the_stay():
     """From 10 s to 35 s after the inversion (eps 0.01, 36 rad/s): the mean spin about the vertical falls by
-    0.812 rad/s in (C8) and by 0.796 rad/s in ODE Model 1 (mean over 2 s); Omega (the energy partition's) ends
-    0.01 rad/s apart, the amplitudes 10 % and 11 % (measured)."""
+    0.742 rad/s in (C8) and by 0.796 rad/s in ODE Model 1 (mean over 2 s); Omega (the energy partition's) ends
+    0.08 rad/s apart, the amplitudes 7 % and 10 % (measured)."""
     ds = passage(0.01)
     times, t_in = ds.near_time.values, ds.attrs["t_inverted"]
     t0, t1 = (times[np.argmin(np.abs(times - (t_in + dt)))] for dt in (10.0, 35.0))
@@ -217,8 +217,16 @@ def test_bad_arguments_are_one_line_errors():
         sp.amplitude_system(spins=(40.0, 22.0))
     states, ending = sp.amplitude_run([23.0, 50.0, 1.0], np.linspace(0.0, 60.0, 61), setup_at(0.01))
     assert ending == "left_fitted_spins" and len(states) < 61 and states[-1][0] > 21.9  # no extrapolation
-    with pytest.raises(ParameterError, match="not in the passage"):
+    with pytest.raises(ParameterError, match="not a sample of the passage"):
         sp.amplitude_start(passage(0.02), 1.0)
+    with pytest.raises(ParameterError, match="fitted spins"):  # no run from outside the fit: no extrapolation
+        sp.amplitude_run([10.0, 1.0, 1.0], [0.0, 1.0], setup_at(0.01))
+    with pytest.raises(ParameterError, match="N >= 0"):
+        sp.amplitude_run([30.0, -1.0, 1.0], [0.0, 1.0], setup_at(0.01))
+    with pytest.raises(ParameterError, match="rates_at"):
+        sp.amplitude_system(rates_at="somewhere")
+    with pytest.raises(ParameterError, match="two numbers"):
+        sp.amplitude_system(spins=(22.0,))
     with pytest.raises(ParameterError, match="give states"):
         sp.modal_amplitudes(np.zeros((10, 7)), np.full(5, 32.0))
     with pytest.raises(ParameterError, match="samples"):

@@ -30,6 +30,7 @@ import copy
 import functools
 import json
 import math
+import numbers
 
 import heyoka as hy
 import numpy as np
@@ -53,7 +54,7 @@ NONE = -1.0  # t_inverted, t_fell_back [s] of a run in which it did not happen
 MAX_SAMPLES = 2e6  # samples of one passage (16 s of ODE Model 1 states per 1e5)
 
 
-MATCH = 0.25  # a pair is a rolling mode when its frequency lies within this fraction of (C2)'s
+MATCH = 0.25  # a pair is a rolling mode when it lies within this fraction of its frequency of (C3)'s eigenvalue
 
 
 def _modes(system, spin: float, pars: np.ndarray, setup: Setup):
@@ -61,7 +62,7 @@ def _modes(system, spin: float, pars: np.ndarray, setup: Setup):
     the pairs (upper half plane) whose frequencies match the rolling nutation and precession of (C2). A
     ParameterError where there is no such pair: below the collision of the rolling pairs, or at an eps so large
     for this spin that friction has changed them beyond recognition."""
-    if not math.isfinite(spin):
+    if not (isinstance(spin, numbers.Real) and math.isfinite(spin)):
         raise ParameterError(f"spin = {spin!r}: give a finite spin in rad/s")
     if setup.disk.e <= 0:
         raise ParameterError("e = 0: a balanced disk has no inverted spin to split into modes; give e > 0 [m]")
@@ -72,14 +73,14 @@ def _modes(system, spin: float, pars: np.ndarray, setup: Setup):
     spin_x = stationary_state("inverted", [spin])[:, 0]
     eigenvalues, right = np.linalg.eig(system.jacobian(spin_x, pars))
     upper = np.flatnonzero(eigenvalues.imag > 1e-9)
-    found = {}
+    found, eps = {}, setup.friction.eps
     for mode in MODES:
-        nu = rolling[f"nu_{mode}"]
+        nu, damping = rolling[f"nu_{mode}"], eps * rolling[f"rate_{mode}"]
         k = upper[np.argmin(np.abs(eigenvalues[upper].imag - nu))] if upper.size else None
-        if k is None or abs(eigenvalues[k].imag - nu) > MATCH * nu:
-            raise ParameterError(f"at {spin:.4g} rad/s and eps = {setup.friction.eps:g} m/s no pair of the inverted "
-                                 f"spin has the rolling {mode}'s frequency {nu:.4g} rad/s (C2): friction has changed "
-                                 "the modes; give a smaller eps")
+        if k is None or abs(eigenvalues[k] - (damping + 1j * nu)) > MATCH * nu:
+            raise ParameterError(f"at {spin:.4g} rad/s and eps = {eps:g} m/s no pair of the inverted spin has the "
+                                 f"rolling {mode}'s frequency {nu:.4g} rad/s (C2) and damping {damping:.3g} 1/s (C3): "
+                                 "friction has changed the modes; give a smaller eps")
         found[mode] = int(k)
     if found["nutation"] == found["precession"]:
         raise ParameterError(f"at {spin:.4g} rad/s the nutation and precession cannot be told apart; give a faster spin")
@@ -156,31 +157,37 @@ def mode_energetics(spin: float, setup: Setup | None = None) -> dict[str, float]
 
 AMPLITUDE_SPINS = (22.0, 40.0)  # rad/s: the spins the amplitude model's coefficients are fitted over
 AMPLITUDE_FIT = (37, 12)  # spins sampled, degree of the Chebyshev series of each coefficient
-RATES_AT = "vertical"  # the rates are evaluated at the mean vertical spin (or "omega_x": at Omega; see (C8))
-AMPLITUDE_STATES = ("spin", "nutation_power", "precession_power")  # Omega [rad/s], |z_n|^2, |z_p|^2
+RATES_AT = ("vertical", "omega_x")  # where (C8) evaluates the rates: the mean vertical spin W, or Omega
+AMPLITUDE_STATES = ("omega_mean", "nutation_power", "precession_power")  # Omega [rad/s], |z_n|^2, |z_p|^2
 
 
-def amplitude_system(setup: Setup | None = None, spins: tuple = AMPLITUDE_SPINS) -> System:
-    """The stay as a three-dimensional ODE (C8): Omega, the body rate omega_x averaged over the modes' phases
-    (the family coordinate of the inverted spins), and the squared amplitudes N = ``|z_n|^2``, P = ``|z_p|^2``
-    of their nutation and precession, with
+def amplitude_system(setup: Setup | None = None, spins: tuple = AMPLITUDE_SPINS, rates_at: str = "vertical") -> System:
+    """The stay as a three-dimensional ODE (C8): Omega, the mean body rate omega_x (the family coordinate of
+    the inverted spins, here defined by the energy partition E = E*(Omega) + kappa_n N + kappa_p P), and the
+    squared amplitudes N = ``|z_n|^2``, P = ``|z_p|^2`` of their nutation and precession:
 
         dN/dt = 2 Re lambda_n(W) N,   dP/dt = 2 Re lambda_p(W) P,
-        A Omega dOmega/dt = (pi_n - 2 Re lambda_n kappa_n) N + (pi_p - 2 Re lambda_p kappa_p) P,
+        A Omega dOmega/dt = (pi_n - 2 Re lambda_n(W) kappa_n) N + (pi_p - 2 Re lambda_p(W) kappa_p) P,
 
-    W = Omega + c_n N + c_p P the mean spin about the vertical (observable ``alpha_dot_mean``; c: the modes'
-    spin offsets of :func:`mode_energetics`). Assumptions: the state stays near the family of inverted spins
+    W = Omega + c_n(Omega) N + c_p(Omega) P the mean spin about the vertical (observable ``alpha_dot_mean``; c:
+    the spin offsets of :func:`mode_energetics`; pi, kappa, c taken at Omega). The drift uses the amplitudes' own
+    rates, so the energy balance (C7) holds along the model. Assumptions: the state stays near the family of inverted spins
     (the linear modes describe it); the two modes' phases are averaged over (their frequencies, about 6 and
-    29 rad/s, are not in resonance); Omega is what the energy partition E = E*(Omega) + kappa_n N + kappa_p P
-    leaves; the rates are taken at W (RATES_AT). To second order in the amplitudes that last choice does not
-    matter; at the stay's amplitudes it does, and W is the one that follows ODE Model 1 (docs/inversion.md).
-    The coefficients come from :func:`mode_energetics` on ``spins`` (Chebyshev series; the fit is checked at the
-    midpoints and a ParameterError names a misfit); the terminal event ``left_fitted_spins`` ends a run that
-    leaves them. All are O(eps), so in the slow time eps t the model does not depend on eps."""
+    29 rad/s, are not in resonance); the amplitude equations' rates are taken at W (``rates_at`` "vertical"; or
+    "omega_x": at Omega). To second order in the amplitudes that choice makes no difference; it is a fit of one
+    fourth-order term, which the stay's amplitudes make large (docs/inversion.md). The coefficients come from
+    :func:`mode_energetics` on ``spins`` (Chebyshev series, checked at the midpoints; a ParameterError names a
+    misfit); terminal events end a run in which Omega or W leaves them. All coefficients are O(eps), so in the
+    slow time eps t the model does not depend on eps."""
     setup = Setup() if setup is None else setup
-    low, high = spins
+    try:
+        low, high = (float(w) for w in spins)
+    except (TypeError, ValueError):
+        raise ParameterError(f"spins = {spins!r}: give two numbers LOW, HIGH in rad/s") from None
     if not (math.isfinite(low) and math.isfinite(high) and low < high):
         raise ParameterError(f"spins = {spins}: give finite LOW < HIGH in rad/s")
+    if rates_at not in RATES_AT:
+        raise ParameterError(f"rates_at = {rates_at!r}: choose one of {', '.join(RATES_AT)}")
     count, degree = AMPLITUDE_FIT
     grid = np.linspace(low, high, count)
     centre, half = 0.5 * (low + high), 0.5 * (high - low)
@@ -190,14 +197,13 @@ def amplitude_system(setup: Setup | None = None, spins: tuple = AMPLITUDE_SPINS)
     def coefficient(row, mode, what):
         if what in ("rate", "spin_offset"):
             return row[f"{mode}_{what}"]
-        return (row[f"{mode}_friction_power"] - 2.0 * row[f"{mode}_rate"] * row[f"{mode}_energy"]) / (
-            row["spin_energy_slope"])
+        return row[f"{mode}_{what}"] / row["spin_energy_slope"]  # friction_power or energy over A Omega
 
     spin, nutation, precession = variables = hy.make_vars(*AMPLITUDE_STATES)
     u = (spin - centre) / half
     fits = {}
     for mode in MODES:
-        for what in ("rate", "drift", "spin_offset"):
+        for what in ("rate", "friction_power", "energy", "spin_offset"):
             values = np.array([coefficient(row, mode, what) for row in rows])
             coefficients = np.polynomial.chebyshev.chebfit((grid - centre) / half, values, degree)
             midpoints = 0.5 * (grid[1:] + grid[:-1])[::4]
@@ -209,29 +215,47 @@ def amplitude_system(setup: Setup | None = None, spins: tuple = AMPLITUDE_SPINS)
             fits[mode, what] = coefficients
     offset = {mode: _chebyshev_expression(fits[mode, "spin_offset"], u) for mode in MODES}
     vertical = spin + offset["nutation"] * nutation + offset["precession"] * precession
-    at = {"omega_x": u, "vertical": (vertical - centre) / half}[RATES_AT]
-    series = {(mode, what): _chebyshev_expression(fits[mode, what], at) for mode in MODES for what in ("rate", "drift")}
-    rhs = [series["nutation", "drift"] * nutation + series["precession", "drift"] * precession,
-           2.0 * series["nutation", "rate"] * nutation, 2.0 * series["precession", "rate"] * precession]
-    leaves = Event("left_fitted_spins", (spin - low) * (high - spin), "negative")  # terminal: no extrapolation
-    return System(f"tippedisk_stay_amplitudes_eps{setup.friction.eps:g}", variables, rhs, {},
-                  state_names=AMPLITUDE_STATES, units={"spin": "rad s-1", "nutation_power": "1",
-                                                       "precession_power": "1"}, time_units="s", events=(leaves,),
-                  observables={"alpha_dot_mean": (vertical, "rad s-1")},
-                  description=f"the stay near the inverted spins as amplitudes (C7), {low:g}-{high:g} rad/s")
+    at = {"omega_x": u, "vertical": (vertical - centre) / half}[rates_at]
+    rate = {mode: _chebyshev_expression(fits[mode, "rate"], at) for mode in MODES}
+    drift = {mode: _chebyshev_expression(fits[mode, "friction_power"], u)  # the amplitudes' own rates: (C7) holds
+             - 2.0 * rate[mode] * _chebyshev_expression(fits[mode, "energy"], u) for mode in MODES}
+    rhs = [drift["nutation"] * nutation + drift["precession"] * precession,
+           2.0 * rate["nutation"] * nutation, 2.0 * rate["precession"] * precession]
+    events = (Event("left_fitted_spins", (spin - low) * (high - spin), "negative"),  # terminal: no extrapolation
+              Event("left_fitted_spins", (vertical - low) * (high - vertical), "negative"))
+    system = System(f"tippedisk_stay_amplitudes_eps{setup.friction.eps:g}_{rates_at}", variables, rhs, {},
+                    state_names=AMPLITUDE_STATES, units={"omega_mean": "rad s-1", "nutation_power": "1",
+                                                         "precession_power": "1"}, time_units="s", events=events,
+                    observables={"alpha_dot_mean": (vertical, "rad s-1")},
+                    description=f"the stay near the inverted spins as amplitudes (C8), {low:g}-{high:g} rad/s")
+    system.fitted_spins = (low, high)
+    return system
 
 
 def amplitude_run(start, times, setup: Setup | None = None, system: System | None = None) -> tuple:
     """Run the amplitude model (C8) of ``setup`` (or ``system``, an :func:`amplitude_system`) from ``start``
-    (spin [rad/s], N, P) over ``times`` [s] (from 0): (states on the times reached, ending "end" or
-    "left_fitted_spins")."""
+    (Omega [rad/s], N, P: :func:`amplitude_start` takes a passage's state into it) over ``times`` [s] (from 0):
+    (states on the times reached, ending "end" or "left_fitted_spins")."""
     system = amplitude_system(setup) if system is None else system
+    if not hasattr(system, "fitted_spins"):
+        raise ParameterError("system: give one made by spin_passage.amplitude_system")
+    try:
+        start = np.asarray(start, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError(f"start = {start!r}: give (Omega [rad/s], N, P)") from None
+    if start.shape != (3,) or not np.all(np.isfinite(start)) or start[1] < 0 or start[2] < 0:
+        raise ParameterError(f"start = {start}: give finite (Omega [rad/s], N >= 0, P >= 0)")
+    low, high = system.fitted_spins
+    vertical = float(system.observe(start, np.array([]))["alpha_dot_mean"])
+    if not (low <= start[0] <= high and low <= vertical <= high):
+        raise ParameterError(f"the start's Omega = {start[0]:.4g} and mean vertical spin {vertical:.4g} rad/s must lie "
+                             f"in the fitted spins {low:g}-{high:g} rad/s; start nearer the spins")
     times = np.asarray(times, dtype=float)
     if not (times.ndim == 1 and times.size and times[0] == 0.0 and np.all(np.diff(times) > 0)):
         raise ParameterError("times: give increasing times [s] starting at 0")
     ta = copy.deepcopy(system.taylor(1e-12, events=True))
     ta.time = 0.0
-    ta.state[:] = np.asarray(start, dtype=float)
+    ta.state[:] = start
     result = ta.propagate_grid(times)
     states = np.asarray(result[-1])
     if not np.all(np.isfinite(states)):
@@ -252,9 +276,10 @@ def amplitude_start(ds: xr.Dataset, time: float) -> np.ndarray:
     by the energy partition, E*(Omega) = E_tot - kappa_n N - kappa_p P (E* = A Omega^2 / 2 + m g (r + e))."""
     setup = passage_setup(ds)
     times = ds.near_time.values
-    if times.size == 0 or not times[0] <= time <= times[-1]:
-        raise ParameterError(f"time = {time} s is not in the passage near the inverted spin; pick one of its times")
-    k = int(np.argmin(np.abs(times - time)))
+    k = int(np.argmin(np.abs(times - time))) if times.size and isinstance(time, numbers.Real) else None
+    if k is None or not abs(times[k] - time) <= 0.5 * SAMPLE_STEP + 1e-9:
+        raise ParameterError(f"time = {time!r} s is not a sample of the passage near the inverted spin; pick one of "
+                             "its times (near_time)")
     spin = float(ds.spin.values[ds.near_spin.values == 1][k])
     energetics = mode_energetics(spin, setup)
     powers = [float(ds[f"{mode}_amplitude"].values[k]) ** 2 for mode in MODES]
@@ -389,9 +414,13 @@ def _dataset(times, height, spins, energy, near, modes, setup, status, info) -> 
 
 def passage_setup(ds: xr.Dataset) -> Setup:
     """The :class:`Setup` a passage dataset was run with (its ``config``)."""
-    if ds.attrs.get("kind") != "spin_passage":
-        raise ParameterError(f"not a passage dataset (kind {ds.attrs.get('kind')!r}); give one of spin_passage.passage")
-    return setup_from_dict(json.loads(ds.attrs["config"])["setup"])
+    kind = ds.attrs.get("kind") if isinstance(ds, xr.Dataset) else type(ds).__name__
+    if kind != "spin_passage":
+        raise ParameterError(f"not a passage dataset (kind {kind!r}); give one of spin_passage.passage")
+    try:
+        return setup_from_dict(json.loads(ds.attrs["config"])["setup"])
+    except (KeyError, TypeError, ValueError):
+        raise ParameterError("the passage dataset has no setup in its config; run spin_passage.passage again") from None
 
 
 def modal_friction_power(ds: xr.Dataset, n_spins: int = 25) -> np.ndarray:
@@ -399,7 +428,7 @@ def modal_friction_power(ds: xr.Dataset, n_spins: int = 25) -> np.ndarray:
     "<mode>_friction_power" (:func:`mode_energetics`, on ``n_spins`` spins over the passage, interpolated) times
     the squared amplitude. Against the run's own dE/dt it says how much of the loss the linear modes explain."""
     setup = passage_setup(ds)
-    if not (isinstance(n_spins, int) and n_spins >= 2):
+    if not (isinstance(n_spins, numbers.Integral) and n_spins >= 2):
         raise ParameterError(f"n_spins = {n_spins!r}: give an integer of at least 2")
     spins = ds.spin.values[ds.near_spin.values == 1]
     if spins.size == 0:
