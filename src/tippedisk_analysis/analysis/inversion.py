@@ -160,8 +160,8 @@ def outcome(spin: float, *, model: str = "smooth", setup: Setup | None = None, g
         return Outcome(float(spin), "nonfinite", float(ta.time))
     if result == hy.taylor_outcome.time_limit:
         return Outcome(float(spin), "horizon", float(ta.time))
-    index = -int(result) - 1
-    if not 0 <= index < len(model_system.events):
+    index = System.stopping_event(result, model_system.events)
+    if index is None:
         return Outcome(float(spin), "nonfinite", float(ta.time))
     return Outcome(float(spin), model_system.events[index].name, float(ta.time))
 

@@ -37,6 +37,7 @@ import numpy as np
 import xarray as xr
 
 from ..dynamics import Event, System
+from ..dynamics.branches import bounds_pair
 from ..errors import ParameterError
 from ..models import reduced
 from ..parameters import InitialState, Setup, setup_from_dict, to_dict
@@ -180,12 +181,7 @@ def amplitude_system(setup: Setup | None = None, spins: tuple = AMPLITUDE_SPINS,
     misfit); terminal events end a run in which Omega or W leaves them. All coefficients are O(eps), so in the
     slow time eps t the model does not depend on eps."""
     setup = Setup() if setup is None else setup
-    try:
-        low, high = (float(w) for w in spins)
-    except (TypeError, ValueError):
-        raise ParameterError(f"spins = {spins!r}: give two numbers LOW, HIGH in rad/s") from None
-    if not (math.isfinite(low) and math.isfinite(high) and low < high):
-        raise ParameterError(f"spins = {spins}: give finite LOW < HIGH in rad/s")
+    low, high = bounds_pair(spins, "spins [rad/s]")
     if rates_at not in RATES_AT:
         raise ParameterError(f"rates_at = {rates_at!r}: choose one of {', '.join(RATES_AT)}")
     count, degree = AMPLITUDE_FIT
@@ -372,8 +368,8 @@ def _ending(outcome, system, broken: bool) -> str:
         return "nonfinite"
     if outcome == hy.taylor_outcome.time_limit:
         return "horizon"
-    index = -int(outcome) - 1
-    return system.events[index].name if 0 <= index < len(system.events) else "nonfinite"
+    index = System.stopping_event(outcome, system.events)
+    return "nonfinite" if index is None else system.events[index].name
 
 
 def _dataset(times, height, spins, energy, near, modes, setup, status, info) -> xr.Dataset:

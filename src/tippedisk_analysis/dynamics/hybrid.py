@@ -318,8 +318,8 @@ def simulate_hybrid(hybrid: HybridSystem, mode: str, state, t_end: float, *, par
             break
         run.segments.append(Segment(mode, np.append(seg_time, t), np.vstack([out, x])))
         events = hybrid.system(mode).events
-        index = -int(outcome) - 1
-        if not 0 <= index < len(events):
+        index = System.stopping_event(outcome, events)
+        if index is None:
             run.status, run.message = "failed", f"heyoka stopped with {outcome!r} at t = {t:.6g}"
             break
         n_own = len(hybrid.modes[mode].events)

@@ -134,8 +134,8 @@ def crossings(system: System, state, quantity: str, level: float = 0.0, *, pars=
         status, message = "completed", f"reached t_end = {t_end:g} with {n} crossing(s)"
     elif outcome == hy.taylor_outcome.cb_stop:
         status, message = "completed", f"collected {n} crossing(s) by t = {ta.time:.6g}"
-    elif -len(ended) <= int(outcome) <= -1:
-        status = ended[-int(outcome) - 1].name
+    elif (index := System.stopping_event(outcome, ended)) is not None:
+        status = ended[index].name
         message = f"ended at t = {ta.time:.6g} ({status}) after {n} crossing(s)"
     else:
         keep = np.all(np.isfinite(states), axis=1)

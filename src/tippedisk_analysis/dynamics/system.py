@@ -396,6 +396,13 @@ class System:
         what = "the " + ("batch " if batch else "") + ("variational " if tangents or indices else "") + "integrator"
         return self._cached(key, what, build)
 
+    @staticmethod
+    def stopping_event(outcome, events) -> int | None:
+        """Index into ``events`` (the terminal events the integrator got) of the one that stopped heyoka with
+        ``outcome``; None for any other outcome (time limit, callback, non-finite state)."""
+        index = -int(outcome) - 1
+        return index if 0 <= index < len(events) else None
+
     def terminal_events(self, events) -> tuple:
         """The terminal events an integrator gets: True (all), False (none) or their names in order."""
         if events is True:
