@@ -46,7 +46,9 @@ PAPER = ("Sailer, Eugster, Leine, The Tippedisk: a Tippetop Without Rotational S
 KIND_TITLES = {"simulation": "Simulation", "continuation": "Continuation", "periodic_orbits": "Periodic orbits",
                "lyapunov": "Lyapunov exponents", "poincare": "Poincare section", "basins": "Basins of attraction",
                "outcome_map": "Outcome map", "stability_map": "Stability map", "bifurcation": "Bifurcation diagram",
-               "spin_passage": "Passage along the inverted spins"}
+               "spin_passage": "Passage along the inverted spins",
+               "symmetric_family": "Family of symmetric periodic orbits",
+               "nutation_cycles": "Nutation cycles of the held-spin model"}
 
 # name: (units, long_name)
 VARIABLES: dict[str, tuple[str, str]] = {

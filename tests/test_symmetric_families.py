@@ -1,0 +1,107 @@
+"""Families of symmetric periodic orbits and their Melnikov drift (dynamics.symmetric_families), proven on the
+Duffing oscillator with van der Pol damping, x'' = x - x^3 + p (beta x^2 - alpha) x', whose answers are
+quadratures along the exact orbits: at p = 0 the energy H = v^2/2 - x^2/2 + x^4/4 is conserved, the orbits about
+x = 1 turn at x_min = a and x_max, and one revolution changes H by p (beta I2 - alpha I0), I_k = the loop integral
+of x^k v dx (Guckenheimer & Holmes 4.5); the amplitude a = x_min then moves by dH / (dH/da). The drift vanishes
+at beta / alpha = I0 / I2: 1 for small orbits (the Hopf point of x = 1) and 5/4 at the homoclinic loop a -> 0."""
+
+from __future__ import annotations
+
+import math
+
+import heyoka as hy
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+from tippedisk_analysis import dynamics as dy
+from tippedisk_analysis.dynamics.symmetric_families import Shooting, family_drift, symmetric_family
+from tippedisk_analysis.errors import ParameterError
+
+x, v = hy.make_vars("x", "v")
+SHOOTING = Shooting(fixed={"v": 0.0}, vary="x", section=dy.Event("turn", v, "negative"), period_factor=2.0)
+AMPLITUDES = np.array([0.05, 0.2, 0.5, 0.8, 0.95])
+
+
+def duffing_vdp(alpha: float = 1.0, beta: float = 1.1) -> dy.System:
+    return dy.System("duffing_vdp_melnikov", [x, v], [v, x - x**3 + hy.par[0] * (hy.par[2] * x**2 - hy.par[1]) * v],
+                     parameters={"p": 0.0, "alpha": alpha, "beta": beta})
+
+
+def exact(a: float) -> dict:
+    """Period, the loop integrals I0, I2 and dH/da of the orbit through x_min = a, by quadrature."""
+    x_max = math.sqrt(2.0 - a**2)  # V(x) = -x^2/2 + x^4/4 = V(a) at x = a and x_max
+
+    # x = a + (x_max - a) sin^2(theta/2): dx = k dtheta and v = k q with k = (x_max - a) sin(theta/2) cos(theta/2),
+    # q = sqrt((x + a)(x_max + x) / 2) (v^2 = 2 (V(a) - V(x)) = (x^2 - a^2)(x_max^2 - x^2) / 2): no square root
+    # vanishes at the turning points
+    def through(m, n):  # the integral of x^m v^n dx from a to x_max
+        def integrand(th):
+            s = a + (x_max - a) * math.sin(0.5 * th) ** 2
+            k = 0.5 * (x_max - a) * math.sin(th)
+            return s**m * k ** (n + 1) * math.sqrt((s + a) * (x_max + s) / 2.0) ** n
+        return quad(integrand, 0.0, math.pi, epsabs=1e-14, epsrel=1e-13, limit=400)[0]
+
+    return {"period": 2.0 * through(0, -1), "I0": 2.0 * through(0, 1),
+            "I2": 2.0 * through(2, 1), "dH_da": a**3 - a}
+
+
+@pytest.fixture(scope="module")
+def family():
+    system = duffing_vdp()
+    return system, symmetric_family(system, SHOOTING, (0.5, None), (0.0, 1.0), amplitudes=AMPLITUDES)
+
+
+def test_the_periods_of_the_family_are_the_quadratures(family):
+    _system, ds = family
+    exact_periods = np.array([exact(a)["period"] for a in AMPLITUDES])
+    assert ds.attrs["status"] == "completed"
+    assert np.allclose(ds.period.values, exact_periods, rtol=1e-10)
+    # the orbit closes: the section is the right turning point, where x = x_max and v = 0
+    x_max = np.sqrt(2 - AMPLITUDES**2)
+    assert np.allclose(ds.crossing.sel(state="x").values, x_max, atol=1e-10)
+
+
+@pytest.mark.parametrize("beta", [0.9, 1.1, 1.3])
+def test_the_drift_is_the_melnikov_integral(beta):
+    system = duffing_vdp(beta=beta)
+    amplitudes = np.array([0.04, 0.05, 0.06, 0.49, 0.5, 0.51, 0.89, 0.9, 0.91])
+    ds = symmetric_family(system, SHOOTING, (0.5, None), (0.0, 1.0), amplitudes=amplitudes)
+    drift = family_drift(system, ds, SHOOTING, "p")
+    middle = [1, 4, 7]
+    assert drift.drift_valid.values[middle].all()
+    for k in middle:
+        q = exact(amplitudes[k])
+        melnikov = (beta * q["I2"] - 1.0 * q["I0"]) / q["dH_da"]
+        assert drift.drift.values[k] == pytest.approx(melnikov, rel=2e-4, abs=1e-7)
+        assert drift.drift_rate.values[k] == pytest.approx(melnikov / q["period"], rel=2e-4, abs=1e-7)
+
+
+def test_the_drift_vanishes_between_the_hopf_point_and_the_homoclinic_loop():
+    """beta/alpha = I0/I2 at the zero: 1 as a -> 1 (Hopf), 5/4 as a -> 0 (the loop)."""
+    for a, limit in ((0.999, 1.0), (1e-4, 1.25)):
+        q = exact(a)
+        ratio = q["I0"] / q["I2"]
+        assert ratio == pytest.approx(limit, abs=2e-3)
+    a = 0.3
+    ratio = exact(a)["I0"] / exact(a)["I2"]
+    signs = []
+    for beta in (ratio * (1 - 1e-3), ratio * (1 + 1e-3)):
+        system = duffing_vdp(beta=beta)
+        ds = symmetric_family(system, SHOOTING, (0.5, None), (0.0, 1.0), amplitudes=[a - 0.01, a, a + 0.01])
+        signs.append(np.sign(family_drift(system, ds, SHOOTING, "p").drift.values[1]))
+    assert signs == [1.0, -1.0]  # below the zero the orbit shrinks (x_min = a grows towards x = 1), above it grows
+
+
+def test_bad_requests_are_refused_in_one_line(family):
+    system, ds = family
+    with pytest.raises(ParameterError, match="no state"):
+        Shooting(fixed={"w": 0.0}, vary="x", section=SHOOTING.section).check(system)
+    with pytest.raises(ParameterError, match="every state once"):
+        Shooting(fixed={}, vary="x", section=SHOOTING.section).check(system)
+    with pytest.raises(ParameterError, match="needs the amplitudes"):
+        symmetric_family(system, SHOOTING, (0.5, None), (0.0, 1.0))
+    with pytest.raises(ParameterError, match="compute it at 0"):
+        family_drift(system, ds.assign_attrs(config=ds.attrs["config"].replace('"p": 0.0', '"p": 0.1')), SHOOTING, "p")
+    with pytest.raises(ParameterError, match="symmetric_family"):
+        family_drift(system, ds.assign_attrs(kind="continuation"), SHOOTING, "p")
