@@ -162,6 +162,15 @@ print(ds.attrs["message"])  # when S went up, when it fell back below G, how the
 t0 = ds.attrs["t_inverted"] + 5.0
 print(sp.integrated_rate(ds, "precession", t0, t0 + 30.0))
 ''',
+    "tippedisk_analysis.analysis.nutation_cycles": '''
+from tippedisk_analysis.analysis import nutation_cycles as nc
+
+# the nutation family of the rolling held model at 30.5 rad/s, with each orbit's drift under friction
+ds = nc.drift(30.5, max_amplitude=2.0)
+print(ds.attrs["message"])  # how many orbits' drift passed its checks
+# the unstable nutation cycle: nutations of smaller amplitude decay at this held spin, larger ones grow
+print(nc.separatrix(ds))
+''',
     "tippedisk_analysis.plotting": '''
 import tippedisk_analysis as td
 from tippedisk_analysis.plotting import plot_dataset

@@ -58,17 +58,28 @@ def _pars() -> dict:
             "fall_angle": hy.par[PARAMETER_NAMES.index("fall_angle")]}
 
 
+def _flow(eps=None):
+    """(variables, trig, pars, the held slow flow) with eps the runtime parameter, or the number ``eps``."""
+    pars = _pars() if eps is None else {**_pars(), "eps": eps}
+    variables = hy.make_vars(*STATE_NAMES)
+    beta, gamma, _beta_d, _gamma_d = variables
+    trig = Trig(0.0 * beta, 1.0 + 0.0 * beta, hy.sin(beta), hy.cos(beta), hy.sin(gamma), hy.cos(gamma))
+    return variables, trig, pars, slow_flow.slow_dynamics(variables, trig, pars=pars, hold_spin=True)
+
+
+def _defaults() -> dict:
+    defaults = {**dict(zip(ode.PARAMETER_NAMES, ode.parameter_vector())), "spin": DEFAULT_SPIN}
+    return {name: defaults[name] for name in PARAMETER_NAMES}
+
+
 @functools.lru_cache(maxsize=None)
 def system() -> System:
     """The held-spin model as a :class:`~tippedisk_analysis.dynamics.System` (parameters PARAMETER_NAMES,
     default Tables 1-2, eps = 0.1 m/s, spin DEFAULT_SPIN); observables E_tot, friction_power (S4),
     holding_torque and holding_power (tau e_z^I . Omega), lambda_N, cone_margin, z_S, slip |s|; events fell,
     lift_off and cone (as :func:`.slow_flow.system`)."""
-    pars = _pars()
-    variables = hy.make_vars(*STATE_NAMES)
-    beta, gamma, _beta_d, gamma_d = variables
-    trig = Trig(0.0 * beta, 1.0 + 0.0 * beta, hy.sin(beta), hy.cos(beta), hy.sin(gamma), hy.cos(gamma))
-    flow = slow_flow.slow_dynamics(variables, trig, pars=pars, hold_spin=True)
+    variables, trig, pars, flow = _flow()
+    _beta, _gamma, _beta_d, gamma_d = variables
     roll, slow, s = flow.rolling, flow.slow, flow.slip
     omega_vertical = pars["spin"] + gamma_d * trig.cb  # Omega . e_z^I
     observables = {"E_tot": slow.energies["E_kin"] + slow.energies["E_pot"], "friction_power": slow.friction_power,
@@ -78,11 +89,29 @@ def system() -> System:
     reach = (1.0 - slow_flow.CONE_RESERVE) * P["mu"] * roll.lambda_N
     events = (Event("fell", trig.sb - hy.sin(pars["fall_angle"])), Event("lift_off", slow.lambda_N),
               Event("cone", reach * reach - dot(roll.lambda_T_G, roll.lambda_T_G)))
-    defaults = {**dict(zip(ode.PARAMETER_NAMES, ode.parameter_vector())), "spin": DEFAULT_SPIN}
-    return System("tippedisk_held_spin", variables, flow.rhs, {name: defaults[name] for name in PARAMETER_NAMES},
+    return System("tippedisk_held_spin", variables, flow.rhs, _defaults(),
                   state_names=STATE_NAMES, state_scale=(1.0, 1.0, 10.0, 10.0),
                   observables={k: (v, OBSERVABLE_UNITS[k]) for k, v in observables.items()}, events=events,
-                  units={**STATE_UNITS, **{k: PARAMETER_UNITS[k] for k in PARAMETER_NAMES if k != "spin"},
-                         "spin": "rad s-1"},
-                  time_units="s", compact_mode=True,
+                  units=_units(), time_units="s", compact_mode=True,
                   description="the slow flow of the smooth tippedisk with its spin about the vertical held fixed")
+
+
+@functools.lru_cache(maxsize=None)
+def rolling_system() -> System:
+    """The held-spin model at eps = 0: the disk rolls (no slip) with its spin held, the unperturbed system of
+    :mod:`tippedisk_analysis.analysis.nutation_cycles`. The same parameters as :func:`system` (eps and mu unused),
+    so one vector serves both. Written with eps = 0 in the expressions, not as a parameter: heyoka's Taylor
+    coefficients of eps * h overflow near lambda_T = 0 (h is only C^1 there) and 0 * inf is not 0. Reversible:
+    (beta, gamma, beta_dot, gamma_dot) -> (pi - beta, gamma, beta_dot, -gamma_dot) and
+    -> (beta, pi - gamma, -beta_dot, gamma_dot) reverse time (friction breaks both)."""
+    variables, _trig, _pars_, flow = _flow(0.0)
+    observables = {"E_tot": flow.slow.energies["E_kin"] + flow.slow.energies["E_pot"], "z_S": flow.slow.z_S}
+    return System("tippedisk_held_rolling", variables, flow.rhs, _defaults(), state_names=STATE_NAMES,
+                  state_scale=(1.0, 1.0, 10.0, 10.0), observables={k: (v, OBSERVABLE_UNITS[k])
+                                                                   for k, v in observables.items()},
+                  units=_units(), time_units="s", compact_mode=True, strict_parameters=False,
+                  description="the rolling tippedisk with its spin about the vertical held fixed (eps = 0)")
+
+
+def _units() -> dict:
+    return {**STATE_UNITS, **{k: PARAMETER_UNITS[k] for k in PARAMETER_NAMES if k != "spin"}, "spin": "rad s-1"}

@@ -1,0 +1,111 @@
+"""The nutation cycles of the held-spin model: the critical spin is a subcritical Hopf point (docs/inversion.md).
+
+At eps = 0 the held model (:func:`tippedisk_analysis.models.held_spin.rolling_system`: the disk rolls, its spin
+about the vertical held at Omega) is reversible, and its inverted spin is a centre of two pairs: the nutation
+(about 6 rad/s) and the precession (about 28 rad/s). The nutation spans a family of symmetric periodic orbits
+(:mod:`tippedisk_analysis.dynamics.symmetric_families`): each starts upright (beta = pi/2) at a turning point of
+gamma, swings S through the top (gamma = pi/2, beta_dot = 0) and back. Its **amplitude** a = pi/2 - gamma at the
+turning point says how far S swings from straight above G (a = pi: S straight below G).
+
+Friction moves a start across the family: per revolution its amplitude changes by eps times the Melnikov drift
+of the orbit, O(eps) per period, so O(1) per unit slow time eps t (``drift_rate`` per unit eps is d a / d(eps t)).
+For small amplitudes it is (C3)'s real part of the nutation pair, which turns negative at omega_c (the Hopf
+point HOPF2 of the held model). Where it changes sign along the family a nutation cycle survives friction: the
+**separatrix** at that held spin between starts whose nutation decays (smaller amplitude) and grows (larger).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import xarray as xr
+
+from ..dynamics import Event, Options
+from ..dynamics.symmetric_families import Shooting, family_drift, symmetric_family
+from ..errors import ParameterError
+from ..models import held_spin
+from ..parameters import Setup
+from . import inversion
+
+__all__ = ["SHOOTING", "EPS_PROBES", "family", "drift", "separatrix", "amplitude_of"]
+
+_gamma = held_spin.rolling_system().variables[1]
+SHOOTING = Shooting(fixed={"beta": 0.5 * math.pi, "gamma_dot": 0.0}, vary="gamma", free="beta_dot",
+                    condition="beta_dot", section=Event("top", _gamma - 0.5 * math.pi, "positive"),
+                    period_factor=4.0, t_max=60.0)
+"""From a turning point of gamma with the disk upright to the top, where beta_dot = 0 (both reversors' planes)."""
+EPS_PROBES = (1e-5, 2e-5)  # m/s: the two values of eps at which the drift is measured (they must agree)
+START_AMPLITUDE = 0.05  # rad: the family's first member, from the linearisation
+FREE_BOUNDS = (-0.5, 30.0)  # rad/s: beta_dot at the start; the family's lower branch past its fold leaves it
+
+
+def _pars(spin: float, setup: Setup | None, eps: float = 0.0) -> np.ndarray:
+    setup = Setup() if setup is None else setup
+    if not (isinstance(spin, int | float) and math.isfinite(spin) and spin > 0):
+        raise ParameterError(f"spin = {spin!r}: give the held spin in rad/s, e.g. 30.5")
+    pars = inversion.parameters("held", setup, float(spin)).copy()
+    pars[held_spin.system().parameter_index("eps")] = eps
+    return pars
+
+
+def amplitude_of(ds: xr.Dataset) -> np.ndarray:
+    """a = pi/2 - gamma at the family's starts [rad]."""
+    return 0.5 * math.pi - ds.amplitude.values
+
+
+def family(spin: float, setup: Setup | None = None, *, max_amplitude: float = 3.1, max_points: int = 150) -> xr.Dataset:
+    """The nutation family of the rolling held model at ``spin`` [rad/s] (disk of ``setup``), from amplitude
+    START_AMPLITUDE to ``max_amplitude`` [rad] or until beta_dot at the start leaves FREE_BOUNDS (past a fold)."""
+    if not 0.1 < max_amplitude < math.pi:
+        raise ParameterError(f"max_amplitude = {max_amplitude!r} rad: give a value between 0.1 and pi")
+    system = held_spin.rolling_system()
+    pars = _pars(spin, setup)
+    J = system.jacobian(held_spin.spin_state("inverted"), pars)
+    w, V = np.linalg.eig(J)
+    upper = w.imag > 1e-9
+    if upper.sum() != 2 or np.abs(w.real).max() > 1e-9 * np.abs(w).max():
+        raise ParameterError(f"at {spin:g} rad/s the inverted spin is no centre of two pairs (eigenvalues {w}); "
+                             "the nutation family exists above the spin where the pairs collide (18.3 rad/s)")
+    k = np.flatnonzero(upper)[np.argmin(w.imag[upper])]  # the slower pair: the nutation
+    v = V[:, k] * np.exp(-1j * (np.angle(V[:, k][3]) - 0.5 * math.pi))  # gamma_dot's component imaginary
+    b0 = -v.real[2] / v.real[1] * START_AMPLITUDE  # beta_dot at the turning point gamma = pi/2 - a
+    return symmetric_family(system, SHOOTING, (0.5 * math.pi - START_AMPLITUDE, b0),
+                            (0.5 * math.pi - max_amplitude, 0.5 * math.pi - 0.5 * START_AMPLITUDE), pars,
+                            options=Options(ds=0.05, ds_max=0.1, max_points=max_points), free_bounds=FREE_BOUNDS,
+                            direction=-1)
+
+
+def drift(spin: float, setup: Setup | None = None, **kwargs) -> xr.Dataset:
+    """:func:`family` with each orbit's Melnikov drift under friction (per unit eps: ``drift_rate`` is
+    d a / d(eps t) in rad/m, but stored as the change of gamma at the turning point, so its sign is the
+    opposite of a's: positive = the nutation decays)."""
+    ds = family(spin, setup, **kwargs)
+    return family_drift(held_spin.system(), ds, SHOOTING, "eps", EPS_PROBES, unperturbed=held_spin.rolling_system())
+
+
+def separatrix(ds: xr.Dataset) -> dict:
+    """The nutation cycle that survives friction in a :func:`drift` dataset: the amplitude [rad] where the
+    drift changes sign on the family's first branch (up to its fold), interpolated between checked orbits;
+    {"amplitude", "period" [s], "status"}: ``completed``, ``none_decays`` (the drift grows the nutation
+    everywhere: below omega_c), ``all_decay`` (it decays everywhere up to the fold) or ``unchecked`` (a sign
+    change between orbits whose drift is not checked)."""
+    a, rate = amplitude_of(ds), -ds.drift_rate.values  # d a / d(eps t): negative = decaying
+    valid = ds.drift_valid.values.astype(bool)
+    first = np.flatnonzero(ds.fold.values)
+    end = int(first[0]) if first.size else len(a)
+    idx = [k for k in range(end) if valid[k]]
+    if not idx:
+        return {"amplitude": math.nan, "period": math.nan, "status": "unchecked"}
+    signs = np.sign(rate[idx])
+    change = np.flatnonzero(signs[1:] != signs[:-1])
+    if change.size == 0:
+        return {"amplitude": math.nan, "period": math.nan,
+                "status": "all_decay" if signs[0] < 0 else "none_decays"}
+    i, j = idx[change[0]], idx[change[0] + 1]
+    if any(not valid[k] for k in range(i, j + 1)):
+        return {"amplitude": math.nan, "period": math.nan, "status": "unchecked"}
+    w = rate[i] / (rate[i] - rate[j])
+    return {"amplitude": float(a[i] + w * (a[j] - a[i])),
+            "period": float(ds.period.values[i] + w * (ds.period.values[j] - ds.period.values[i])),
+            "status": "completed"}

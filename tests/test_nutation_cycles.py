@@ -1,0 +1,134 @@
+"""The held model's nutation cycles (analysis/nutation_cycles.py): the family of the rolling held model checked
+against its own flow and the rolling frequencies (C2), the Melnikov drift against the closed form (C3), and the
+unstable cycle it predicts against the held model's periodic orbit (shooting at eps > 0) and against runs."""
+
+from __future__ import annotations
+
+import copy
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from tippedisk_analysis import dynamics as dy
+from tippedisk_analysis.analysis import critical_spin as cs
+from tippedisk_analysis.analysis import nutation_cycles as nc
+from tippedisk_analysis.errors import ParameterError
+from tippedisk_analysis.models import held_spin
+
+
+@pytest.fixture(scope="module")
+def family_31():
+    return nc.family(31.0, max_amplitude=2.6)
+
+
+@pytest.fixture(scope="module")
+def drift_30_5():
+    return nc.drift(30.5, max_amplitude=2.6)
+
+
+@pytest.mark.parametrize("flip", [(-1.0, 1.0, 1.0, -1.0), (1.0, -1.0, -1.0, 1.0)])
+def test_the_rolling_held_model_is_reversible_and_friction_breaks_it(flip):
+    """f(Rx) = -R f(x) for R: (beta, gamma, rates) -> (pi - beta, gamma, beta_dot, -gamma_dot) and
+    (beta, pi - gamma, -beta_dot, gamma_dot): what makes the shot orbits periodic."""
+    R = np.diag(flip)
+    shift = np.array([math.pi if flip[0] < 0 else 0.0, math.pi if flip[1] < 0 else 0.0, 0.0, 0.0])
+    rng = np.random.default_rng(7)
+    states = np.column_stack([0.5 * math.pi + 0.4 * rng.standard_normal(50), rng.uniform(-3, 3, 50),
+                              3 * rng.standard_normal(50), 5 * rng.standard_normal(50)])
+    for system, eps, holds in ((held_spin.rolling_system(), 0.0, True), (held_spin.system(), 0.01, False)):
+        pars = nc._pars(30.5, None, eps)
+        error = max(np.abs(system.f(shift + R @ x, pars) + R @ system.f(x, pars)).max()
+                    / max(1.0, np.abs(system.f(x, pars)).max()) for x in states)
+        assert (error < 1e-12) == holds
+
+
+def test_every_member_closes_under_the_rolling_flow_and_the_smallest_has_the_rolling_frequency(family_31):
+    rolling = held_spin.rolling_system()
+    pars = nc._pars(31.0, None)
+    picks = np.linspace(0, family_31.sizes["orbit"] - 1, 6).astype(int)
+    for k in picks:
+        ta = copy.deepcopy(rolling.taylor(1e-13))
+        ta.time, ta.state[:], ta.pars[:] = 0.0, family_31.start.values[k], pars[: len(ta.pars)]
+        ta.propagate_until(float(family_31.period.values[k]))
+        assert np.abs(ta.state - family_31.start.values[k]).max() < 1e-8
+    nu = cs.rates(31.0)["nu_nutation"]
+    assert family_31.period.values[0] == pytest.approx(2 * math.pi / nu, rel=1e-3)
+    assert family_31.attrs["status"] == "completed"
+    amplitude = nc.amplitude_of(family_31)
+    folds = amplitude[family_31.fold.values == 1]
+    assert folds.size == 1 and 2.3 < folds[0] < 2.5  # the family's largest amplitude, located by the core
+
+
+@pytest.mark.parametrize("spin", [29.5, 31.0, 33.0])
+def test_small_nutations_drift_at_the_closed_form_rate(spin):
+    """-d a / d(eps t) / a -> Re lambda / eps of the nutation (C3) as a -> 0 (a cubic in a fitted: the friction
+    law holds |lambda_T|, which grows like |a|, so the drift is not odd in a)."""
+    ds = nc.drift(spin, max_amplitude=0.6, max_points=30)
+    a, rate = nc.amplitude_of(ds), -ds.drift_rate.values
+    use = ds.drift_valid.values.astype(bool) & (a < 0.5)
+    intercept = np.polyfit(a[use], rate[use] / a[use], 3)[-1]
+    assert intercept == pytest.approx(cs.rates(spin)["rate_nutation"], rel=2e-3)
+
+
+def test_the_critical_spin_is_a_subcritical_hopf_point(drift_30_5):
+    below = nc.separatrix(nc.drift(30.0, max_amplitude=1.0, max_points=40))
+    assert below["status"] == "none_decays"
+    above = nc.separatrix(drift_30_5)
+    assert above["status"] == "completed" and 0.5 < above["amplitude"] < 2.0
+
+
+def test_the_separatrix_is_the_held_models_own_unstable_cycle(drift_30_5):
+    """Shooting at eps > 0 finds a periodic orbit at a* + O(eps), whose multiplier along the family is
+    exp(eps T d(drift)/da) > 1: the cycle repels in the amplitude."""
+    star = nc.separatrix(drift_30_5)
+    a, rate = nc.amplitude_of(drift_30_5), -drift_30_5.drift_rate.values
+    k = int(np.argmin(np.abs(a - star["amplitude"])))
+    slope = (rate[k + 1] - rate[k - 1]) / (a[k + 1] - a[k - 1])
+    errors = []
+    for eps in (0.005, 0.0025):
+        orbit = dy.find_orbit(held_spin.system(), drift_30_5.start.values[k], float(drift_30_5.period.values[k]),
+                              nc._pars(30.5, None, eps))
+        assert orbit.converged, orbit.message
+        assert orbit.period == pytest.approx(star["period"], rel=1e-3)
+        errors.append(abs(0.5 * math.pi - orbit.samples[:, 1].min() - star["amplitude"]))
+        real = orbit.multipliers[np.abs(orbit.multipliers.imag) < 1e-9].real
+        family = real[np.argsort(np.abs(real - 1))[1]]  # the nontrivial real multiplier next to the flow's 1
+        assert math.log(family) / (eps * orbit.period) == pytest.approx(slope, rel=0.05)
+    assert errors[1] < 2e-3 and errors[1] < errors[0]
+
+
+@pytest.mark.slow
+def test_the_averaged_drift_follows_the_held_model(drift_30_5):
+    """Runs of the held model (eps 0.01 m/s, 20 s) inside and outside the separatrix: the nutation decays and grows
+    as d a / d(eps t) = drift(a) says, turning point by turning point."""
+    ds = drift_30_5
+    a, rate = nc.amplitude_of(ds), -ds.drift_rate.values
+    star = nc.separatrix(ds)["amplitude"]
+    keep = ds.drift_valid.values.astype(bool) & (np.arange(a.size) < np.flatnonzero(ds.fold.values)[0])
+    order = np.argsort(a[keep])
+    eps = 0.01
+    for offset, sign in ((-0.3, -1.0), (0.3, 1.0)):
+        k = int(np.argmin(np.abs(a - (star + offset))))
+        ta = copy.deepcopy(held_spin.system().taylor(1e-12))
+        ta.time, ta.state[:] = 0.0, ds.start.values[k]
+        ta.pars[:] = nc._pars(30.5, None, eps)[: len(ta.pars)]
+        times = np.linspace(0.0, 20.0, 20001)
+        states = ta.propagate_grid(times)[-1]
+        turns = np.flatnonzero((states[:-1, 3] < 0) & (states[1:, 3] >= 0))
+        measured = 0.5 * math.pi - states[turns, 1]
+        averaged = solve_ivp(lambda s, y: [np.interp(y[0], a[keep][order], rate[keep][order])],
+                             (0.0, eps * times[turns[-1]]), [a[k]], dense_output=True, rtol=1e-9, atol=1e-12)
+        expected = averaged.sol(eps * times[turns])[0]
+        assert np.sign(measured[-1] - measured[0]) == sign
+        assert np.abs(measured - expected).max() < 0.01
+
+
+def test_bad_spins_are_refused_in_one_line():
+    with pytest.raises(ParameterError, match="held spin"):
+        nc.family(-3.0)
+    with pytest.raises(ParameterError, match="no centre of two pairs"):
+        nc.family(10.0)
+    with pytest.raises(ParameterError, match="max_amplitude"):
+        nc.family(31.0, max_amplitude=4.0)
