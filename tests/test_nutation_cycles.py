@@ -16,6 +16,7 @@ from tippedisk_analysis.analysis import critical_spin as cs
 from tippedisk_analysis.analysis import nutation_cycles as nc
 from tippedisk_analysis.errors import ParameterError
 from tippedisk_analysis.models import held_spin
+from tippedisk_analysis.parameters import Disk, Setup
 
 
 @pytest.fixture(scope="module")
@@ -123,6 +124,24 @@ def test_the_averaged_drift_follows_the_held_model(drift_30_5):
         expected = averaged.sol(eps * times[turns])[0]
         assert np.sign(measured[-1] - measured[0]) == sign
         assert np.abs(measured - expected).max() < 0.01
+
+
+def test_a_disk_it_was_not_built_on_has_the_same_subcritical_hopf_point():
+    """The drilled disk with e = 3.5 mm: no cycle 0.2 rad/s below its own omega_c, one 0.3 rad/s above it, and
+    that one is the held model's periodic orbit at eps = 0.005 m/s."""
+    disk = Disk.from_geometry().with_eccentricity(3.5e-3)
+    setup = Setup(disk=disk)
+    omega_c = cs.omega_critical(disk).omega_critical
+    assert nc.separatrix(nc.drift(omega_c - 0.2, setup, max_amplitude=1.5, max_points=40))["status"] == "none_decays"
+    ds = nc.drift(omega_c + 0.3, setup, max_amplitude=2.0, max_points=60)
+    star = nc.separatrix(ds)
+    assert star["status"] == "completed"
+    k = int(np.argmin(np.abs(nc.amplitude_of(ds) - star["amplitude"])))
+    orbit = dy.find_orbit(held_spin.system(), ds.start.values[k], float(ds.period.values[k]),
+                          nc._pars(omega_c + 0.3, setup, 0.005))
+    assert orbit.converged, orbit.message
+    assert 0.5 * math.pi - orbit.samples[:, 1].min() == pytest.approx(star["amplitude"], abs=3e-3)
+    assert orbit.period == pytest.approx(star["period"], rel=1e-3)
 
 
 def test_bad_spins_are_refused_in_one_line():
