@@ -144,6 +144,16 @@ def test_a_disk_it_was_not_built_on_has_the_same_subcritical_hopf_point():
     assert orbit.period == pytest.approx(star["period"], rel=1e-3)
 
 
+def test_the_lower_spins_homoclinic_orbit_returns_to_it():
+    """The unstable manifold of the lower spin reaches the reversor's plane at one held spin and so comes back:
+    checked by running it on, and independent of how far from the spin the manifold is started."""
+    found = nc.homoclinic_spin()
+    assert found["status"] == "completed" and found["return_distance"] < nc.RETURN_TOL
+    other = nc._top_of_unstable_manifold(found["spin"], None, offset=1e-9)[0]
+    assert abs(other[2]) < 1e-6  # beta_dot at the top: the same orbit from a start ten times closer
+    assert nc.homoclinic_spin(bracket=(30.0, 31.0))["status"] == "no_crossing"
+
+
 def test_bad_spins_are_refused_in_one_line():
     with pytest.raises(ParameterError, match="held spin"):
         nc.family(-3.0)

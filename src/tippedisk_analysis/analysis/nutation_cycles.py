@@ -12,23 +12,30 @@ of the orbit, O(eps) per period, so O(1) per unit slow time eps t (``drift_rate`
 For small amplitudes it is (C3)'s real part of the nutation pair, which turns negative at omega_c (the Hopf
 point HOPF2 of the held model). Where it changes sign along the family a nutation cycle survives friction: the
 **separatrix** at that held spin between starts whose nutation decays (smaller amplitude) and grows (larger).
+
+The lower spin (S below G) is a saddle-centre of the rolling held model. At one held spin its unstable
+manifold reaches the top with beta_dot = 0, on the fixed plane of a reversor, and so returns to it: a symmetric
+homoclinic orbit (:func:`homoclinic_spin`).
 """
 
 from __future__ import annotations
 
+import copy
 import math
 
 import numpy as np
 import xarray as xr
 
+from scipy.optimize import brentq
+
 from ..dynamics import Event, Options
-from ..dynamics.symmetric_families import Shooting, family_drift, symmetric_family
+from ..dynamics.symmetric_families import Shooter, Shooting, family_drift, symmetric_family
 from ..errors import ParameterError
 from ..models import held_spin
 from ..parameters import Setup
 from . import inversion
 
-__all__ = ["SHOOTING", "EPS_PROBES", "family", "drift", "separatrix", "amplitude_of"]
+__all__ = ["SHOOTING", "EPS_PROBES", "family", "drift", "separatrix", "amplitude_of", "homoclinic_spin"]
 
 _gamma = held_spin.rolling_system().variables[1]
 SHOOTING = Shooting(fixed={"beta": 0.5 * math.pi, "gamma_dot": 0.0}, vary="gamma", free="beta_dot",
@@ -109,3 +116,51 @@ def separatrix(ds: xr.Dataset) -> dict:
     return {"amplitude": float(a[i] + w * (a[j] - a[i])),
             "period": float(ds.period.values[i] + w * (ds.period.values[j] - ds.period.values[i])),
             "status": "completed"}
+
+
+MANIFOLD_OFFSET = 1e-8  # start of the unstable manifold: this far from the lower spin along its eigenvector
+RETURN_TOL = 1e-5  # the homoclinic orbit must come back this close to the lower spin (state scale)
+
+
+def _top_of_unstable_manifold(spin: float, setup: Setup | None, offset: float = MANIFOLD_OFFSET) -> tuple:
+    """(state at the first crossing of the top, time) of the lower spin's unstable manifold (gamma increasing)
+    in the rolling held model; None if it does not get there."""
+    system = held_spin.rolling_system()
+    pars, lower = _pars(spin, setup), held_spin.spin_state("lower")
+    w, V = np.linalg.eig(system.jacobian(lower, pars))
+    k = int(np.argmax(w.real))
+    if not (abs(w[k].imag) < 1e-9 and w[k].real > 1e-6):
+        raise ParameterError(f"at {spin:g} rad/s the lower spin has no real unstable eigenvalue ({w}); it is no "
+                             "saddle there")
+    v = V[:, k].real / np.linalg.norm(V[:, k].real)
+    return Shooter(system, SHOOTING).run(lower + offset * np.sign(v[1]) * v, pars)
+
+
+def homoclinic_spin(setup: Setup | None = None, bracket: tuple = (30.0, 36.0)) -> dict:
+    """The held spin [rad/s] in ``bracket`` at which the lower spin's unstable manifold crosses the top with
+    beta_dot = 0 (the fixed plane of the reversor (beta, pi - gamma, -beta_dot, gamma_dot)), so that it returns
+    to the lower spin: a symmetric homoclinic orbit of the rolling held model. Checks itself: the orbit, run on
+    for as long again, comes back to within RETURN_TOL of the lower spin. {"spin", "tilt_at_top" (beta - pi/2,
+    rad), "return_distance", "status"}: ``completed``, ``no_crossing`` (beta_dot keeps its sign at the ends of
+    the bracket) or ``not_verified`` (the return check failed)."""
+    low, high = bracket
+    if not (0 < low < high and math.isfinite(high)):
+        raise ParameterError(f"bracket = {bracket!r}: give held spins 0 < low < high [rad/s]")
+
+    def beta_dot(spin):
+        hit = _top_of_unstable_manifold(spin, setup)
+        return math.nan if hit is None else float(hit[0][2])
+
+    ends = beta_dot(low), beta_dot(high)
+    if not (np.all(np.isfinite(ends)) and ends[0] * ends[1] < 0):
+        return {"spin": math.nan, "tilt_at_top": math.nan, "return_distance": math.nan, "status": "no_crossing"}
+    spin = brentq(beta_dot, low, high, xtol=1e-10, rtol=1e-14)
+    top, time = _top_of_unstable_manifold(spin, setup)
+    system = held_spin.rolling_system()
+    ta = copy.deepcopy(system.taylor(1e-13))  # templates are shared
+    ta.time, ta.state[:], ta.pars[:] = time, top, _pars(spin, setup)[: len(ta.pars)]
+    states = ta.propagate_grid(np.linspace(time, 2.0 * time, 4001))[-1]
+    lower = held_spin.spin_state("lower") + np.array([0.0, 2.0 * math.pi, 0.0, 0.0])  # gamma went once round
+    distance = float(np.min(np.abs((states - lower) / np.array(system.state_scale)).max(axis=1)))
+    return {"spin": float(spin), "tilt_at_top": float(top[0] - 0.5 * math.pi), "return_distance": distance,
+            "status": "completed" if distance < RETURN_TOL else "not_verified"}

@@ -41,7 +41,7 @@ from .continuation_interface import Options, Problem
 from .datasets import flag_attrs, mixed_units, state_coordinates
 from .system import Event, System
 
-__all__ = ["Shooting", "symmetric_family", "family_drift"]
+__all__ = ["Shooting", "Shooter", "symmetric_family", "family_drift"]
 
 TOL = 1e-13  # Taylor tolerance of the shooting runs
 FD_STEP = 1e-7  # relative finite-difference step of the shooting Jacobian and of DP0
@@ -81,7 +81,7 @@ class Shooting:
             raise ParameterError("period_factor and t_max must be positive")
 
 
-class _Shooter:
+class Shooter:
     """Runs to the section (and round again, for the return map) with the System's compiled integrators."""
 
     def __init__(self, system: System, shooting: Shooting, tol: float = TOL):
@@ -121,7 +121,7 @@ class _Shooter:
 class _FamilyProblem(Problem):
     """F(free, amplitude) = condition at the section, continued by the core in the amplitude (its fold test)."""
 
-    def __init__(self, shooter: _Shooter, pars: np.ndarray, bounds: tuple, scale: tuple, free_bounds: tuple | None):
+    def __init__(self, shooter: Shooter, pars: np.ndarray, bounds: tuple, scale: tuple, free_bounds: tuple | None):
         self.shooter, self.pars = shooter, pars
         self.names = (shooter.shooting.free, shooter.shooting.vary)
         self.scale = np.asarray(scale, dtype=float)
@@ -162,7 +162,7 @@ def symmetric_family(system: System, shooting: Shooting, start: tuple, bounds: t
     of the amplitude (``fold`` = 1); status ``completed`` (a bound reached), or the core's ``max_points``,
     ``stalled``, ``corrector_failed`` with its message."""
     pars = system.with_pars(pars)
-    shooter = _Shooter(system, shooting)
+    shooter = Shooter(system, shooting)
     low, high = bounds
     if not (math.isfinite(low) and math.isfinite(high) and low < high):
         raise ParameterError(f"bounds = {bounds!r}: give finite (low, high) amplitudes with low < high")
@@ -238,8 +238,8 @@ def family_drift(system: System, family: xr.Dataset, shooting: Shooting, paramet
     it runs the return map at 0, ``system`` at the small values."""
     if family.attrs.get("kind") != "symmetric_family":
         raise ParameterError("family: give a dataset of dynamics.symmetric_families.symmetric_family")
-    shooter = _Shooter(system, shooting)
-    base_shooter = shooter if unperturbed is None else _Shooter(unperturbed, shooting)
+    shooter = Shooter(system, shooting)
+    base_shooter = shooter if unperturbed is None else Shooter(unperturbed, shooting)
     config = json.loads(family.attrs["config"])
     pars = system.with_pars([config["pars"][n] for n in system.parameter_names])
     index = system.parameter_index(parameter)
