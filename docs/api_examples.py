@@ -168,8 +168,8 @@ from tippedisk_analysis.analysis import nutation_cycles as nc
 # the nutation family of the rolling held model at 30.5 rad/s, with each orbit's drift under friction
 ds = nc.drift(30.5, max_amplitude=2.0)
 print(ds.attrs["message"])  # how many orbits' drift passed its checks
-# the unstable nutation cycle: nutations of smaller amplitude decay at this held spin, larger ones grow
-print(nc.separatrix(ds))
+# the nutation cycles: inside the repelling one the nutation decays at this held spin, outside it grows
+print(nc.cycles(ds))
 ''',
     "tippedisk_analysis.plotting": '''
 import tippedisk_analysis as td

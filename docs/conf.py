@@ -57,7 +57,7 @@ API_MODULES = (
     ("tippedisk_analysis.analysis.inversion", "Whether a start inverts: the threshold of the initial spin"),
     ("tippedisk_analysis.analysis.critical_spin", "The critical spin in closed form"),
     ("tippedisk_analysis.analysis.spin_passage", "After the inversion: the passage along the inverted spins"),
-    ("tippedisk_analysis.analysis.nutation_cycles", "The held model's nutation cycles: a subcritical Hopf point"),
+    ("tippedisk_analysis.analysis.nutation_cycles", "The held model's nutation cycles"),
     ("tippedisk_analysis.plotting", "Figures and animations"),
     ("tippedisk_analysis.solvers.moreau", "Moreau time stepping"),
 )

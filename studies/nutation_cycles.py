@@ -1,14 +1,14 @@
-"""The critical spin as a subcritical Hopf point: the held model's nutation cycles and the separatrix they make
-(docs/inversion.md).
+"""The held model's nutation cycles: a Hopf point at omega_c, a fold of cycles just below it, and the repelling
+cycle above it that bounds the nutations the inverted spin damps (docs/inversion.md).
 
     tippedisk study nutation_cycles [--output-dir DIR] [--quick]
 
 For held spins around omega_c (Tables 1-2 disk) computes the nutation family of the rolling held model (eps = 0),
-each orbit's Melnikov drift under friction (analysis/nutation_cycles.py), and the amplitude a* where the drift
-changes sign: the unstable nutation cycle that separates decaying from growing nutations. Checks the cycle
-against the held model's own periodic orbit at eps = 0.005 m/s (shooting), and the drift against runs of the held
-model at eps = 0.01 m/s. Writes nutation_cycles.nc (the separatrix over the held spin), nutation_family_30.5.nc
-(the family at 30.5 rad/s with its drift, kind symmetric_family) and nutation_cycles.png.
+each orbit's Melnikov drift under friction (analysis/nutation_cycles.py), and the amplitudes where the drift
+changes sign: the nutation cycles. Locates the fold of cycles below omega_c; checks the repelling cycle against
+the held model's own periodic orbit at eps = 0.005 m/s (shooting), and the drift against runs of the held
+model at eps = 0.01 m/s. Writes nutation_cycles.nc (the repelling cycle over the held spin),
+nutation_family_30.5.nc (the family at 30.5 rad/s with its drift, kind symmetric_family) and nutation_cycles.png.
 """
 
 from __future__ import annotations
@@ -37,13 +37,14 @@ PORTRAIT_SPIN = 30.5  # rad/s: the family stored and drawn
 ORBIT_EPS = 0.005  # m/s: the held model's own cycle, found by shooting
 RUN_EPS = 0.01  # m/s: runs of the held model against the drift
 RUN_SLOW_TIME = 0.4  # m: eps t of each run
-RUN_OFFSET = 0.3  # rad: the runs start this far inside and outside the separatrix
+RUN_OFFSET = 0.3  # rad: the runs start this far inside and outside the repelling cycle
+ZOOM_SPINS = (30.2285, 30.229, 30.2295, 30.230, 30.231, 30.232, 30.2325, 30.234, 30.236)  # rad/s: near the fold
 
 
-def held_cycle(ds: xr.Dataset, spin: float, separatrix: dict) -> dict:
-    """The held model's periodic orbit at ORBIT_EPS from the family member nearest the separatrix."""
+def held_cycle(ds: xr.Dataset, spin: float, cycle: dict) -> dict:
+    """The held model's periodic orbit at ORBIT_EPS from the family member nearest ``cycle``."""
     a = nc.amplitude_of(ds)
-    k = int(np.argmin(np.abs(a - separatrix["amplitude"])))
+    k = int(np.argmin(np.abs(a - cycle["amplitude"])))
     orbit = dy.find_orbit(held_spin.system(), ds.start.values[k], float(ds.period.values[k]),
                           nc._pars(spin, None, ORBIT_EPS))
     if not orbit.converged:
@@ -68,19 +69,19 @@ def held_run(ds: xr.Dataset, spin: float, amplitude: float) -> dict:
     turns = np.flatnonzero((gamma_dot[:-1] < 0) & (gamma_dot[1:] >= 0))
     valid = ds.drift_valid.values.astype(bool) & (np.arange(a.size) < np.flatnonzero(ds.fold.values)[0])
     order = np.argsort(a[valid])
-    rate = -ds.drift_rate.values[valid][order]
+    rate = ds.amplitude_rate.values[valid][order]
     averaged = solve_ivp(lambda s, y: [np.interp(y[0], a[valid][order], rate)], (0.0, RUN_EPS * times[turns[-1]]),
                          [a[k]], dense_output=True, rtol=1e-9, atol=1e-12)
     return {"times": times, "states": states, "turn_times": times[turns], "measured": 0.5 * math.pi - gamma[turns],
             "averaged": averaged.sol(RUN_EPS * times[turns])[0]}
 
 
-def curve_dataset(rows: list, spins_without: list) -> xr.Dataset:
-    """The separatrix a*(Omega) over the held spins where it exists (kind nutation_cycles)."""
+def curve_dataset(rows: list, spins_without: list, fold: dict) -> xr.Dataset:
+    """The repelling cycle a*(Omega) over the held spins where it exists (kind nutation_cycles)."""
     ds = xr.Dataset({
-        "separatrix_amplitude": ("spin", [r["amplitude"] for r in rows], {"units": "rad", "long_name":
-                                 "amplitude a* of the unstable nutation cycle (Melnikov drift zero, eps -> 0)"}),
-        "separatrix_period": ("spin", [r["period"] for r in rows], {"units": "s", "long_name": "its period"}),
+        "repelling_amplitude": ("spin", [r["amplitude"] for r in rows], {"units": "rad", "long_name":
+                                "amplitude a* of the repelling nutation cycle (Melnikov drift zero, eps -> 0)"}),
+        "repelling_period": ("spin", [r["period"] for r in rows], {"units": "s", "long_name": "its period"}),
         "fold_amplitude": ("spin", [r["fold"] for r in rows], {"units": "rad", "long_name":
                            "largest amplitude of the nutation family (its fold)"}),
         "held_cycle_amplitude": ("spin", [r["held"]["amplitude"] for r in rows], {"units": "rad", "long_name":
@@ -89,27 +90,40 @@ def curve_dataset(rows: list, spins_without: list) -> xr.Dataset:
                               f"period of the held model's periodic orbit at eps = {ORBIT_EPS:g} m/s"}),
     }, coords={"spin": ("spin", [r["spin"] for r in rows], {"units": "rad s-1", "long_name": "held spin"})})
     without = ", ".join(f"{s:g} rad/s ({status})" for s, status in spins_without)
-    message = (f"an unstable nutation cycle at {len(rows)} held spins; none at {without}" if without else
-               f"an unstable nutation cycle at {len(rows)} held spins")
+    message = (f"a repelling nutation cycle at {len(rows)} held spins; none at {without}" if without else
+               f"a repelling nutation cycle at {len(rows)} held spins")
+    message += f"; the fold of cycles at {fold['spin']:.4f} rad/s ({fold['status']})"
     ds.attrs = make_attrs("nutation_cycles", {"spins": [r["spin"] for r in rows], "orbit_eps": ORBIT_EPS},
-                          "completed", message, model=held_spin.system().name)
+                          "completed", message, model=held_spin.system().name, fold_of_cycles=fold["spin"])
     return ds
 
 
-def figure(families: dict, rows: list, runs: list, path: Path) -> None:
+def zoom(spins) -> list:
+    """(spin, kind, amplitude) of every cycle at the spins near the fold of cycles."""
+    found = []
+    for spin in spins:
+        for cycle in nc.cycles(nc.drift(spin, max_amplitude=0.6, max_points=60))["cycles"]:
+            found.append((spin, cycle["kind"], cycle["amplitude"]))
+    return found
+
+
+def figure(families: dict, rows: list, runs: list, near: list, fold: dict, path: Path) -> None:
     fig, ax = plt.subplots(1, 3, figsize=(15, 4.4))
     critical = cs.omega_critical()
     colors = plt.cm.viridis(np.linspace(0.0, 0.9, len(families)))
     for (spin, ds), color in zip(families.items(), colors):
         a = nc.amplitude_of(ds)
         keep = ds.drift_valid.values.astype(bool) & (np.arange(a.size) < np.flatnonzero(ds.fold.values)[0])
-        ax[0].plot(a[keep], -ds.drift_rate.values[keep], color=color, label=f"{spin:g} rad/s")
+        ax[0].plot(a[keep], ds.amplitude_rate.values[keep], color=color, label=f"{spin:g} rad/s")
     ax[0].axhline(0.0, color="k", lw=0.6)
     ax[0].set(xlabel="nutation amplitude a [rad]", ylabel=r"d a / d($\varepsilon t$) [rad/m]",
               title="Melnikov drift along the family: < 0 decays")
+    ax[0].set_ylim(-4, 7)
     spins = np.array([r["spin"] for r in rows])
-    ax[1].plot([critical.omega_critical, *spins], [0.0, *[r["amplitude"] for r in rows]], "r--",
-               label="unstable nutation cycle a* (Melnikov)")
+    repelling = sorted([(s_, a_) for s_, k_, a_ in near if k_ == "repelling"]
+                       + [(r["spin"], r["amplitude"]) for r in rows])
+    ax[1].plot([p[0] for p in repelling], [p[1] for p in repelling], "r--",
+               label="repelling nutation cycle a* (Melnikov)")
     ax[1].plot(spins, [r["held"]["amplitude"] for r in rows], "ko", ms=4, mfc="none",
                label=rf"held model's periodic orbit, $\varepsilon$ = {ORBIT_EPS:g} m/s")
     every = np.array(list(families))
@@ -119,7 +133,16 @@ def figure(families: dict, rows: list, runs: list, path: Path) -> None:
     ax[1].plot([every.min(), critical.omega_critical], [0, 0], "b:", lw=3, label="inverted spin, nutation grows")
     ax[1].axvline(critical.omega_critical, color="k", ls=":", label=r"$\omega_c$ (C4): the Hopf point")
     ax[1].set(xlabel=r"held spin $\Omega$ [rad/s]", ylabel="a [rad]", ylim=(0, 2.6),
-              title="a subcritical Hopf point at omega_c")
+              title="the cycles that bound the damped nutations")
+    inset = ax[1].inset_axes([0.58, 0.42, 0.38, 0.38])
+    for kind, style in (("attracting", "r-"), ("repelling", "r--")):
+        pts = sorted((s_, a_) for s_, k_, a_ in near if k_ == kind)
+        inset.plot([p[0] for p in pts], [p[1] for p in pts], style, marker=".", ms=3, label=kind)
+    inset.axvline(critical.omega_critical, color="k", ls=":")
+    inset.axvline(fold["spin"], color="grey", ls="-.")
+    inset.set_title("near omega_c: a fold of cycles (dash-dot)", fontsize=6)
+    inset.tick_params(labelsize=5)
+    inset.legend(fontsize=5)
     ds = families[PORTRAIT_SPIN]
     a = nc.amplitude_of(ds)
     rolling = held_spin.rolling_system()
@@ -129,12 +152,13 @@ def figure(families: dict, rows: list, runs: list, path: Path) -> None:
         ta.time, ta.state[:], ta.pars[:] = 0.0, ds.start.values[k], pars[: len(ta.pars)]
         states = ta.propagate_grid(np.linspace(0.0, float(ds.period.values[k]), 400))[-1]
         ax[2].plot(states[:, 1], states[:, 3], color="grey", lw=0.6)
-    separatrix = nc.separatrix(ds)
-    k = int(np.argmin(np.abs(a - separatrix["amplitude"])))
+    repelling = nc.repelling_cycle(ds)
+    k = int(np.argmin(np.abs(a - repelling["amplitude"])))
     ta = copy.deepcopy(rolling.taylor(1e-12))
     ta.time, ta.state[:], ta.pars[:] = 0.0, ds.start.values[k], pars[: len(ta.pars)]
     states = ta.propagate_grid(np.linspace(0.0, float(ds.period.values[k]), 400))[-1]
-    ax[2].plot(states[:, 1], states[:, 3], "r--", lw=1.4, label=f"separatrix a* = {separatrix['amplitude']:.3f} rad")
+    ax[2].plot(states[:, 1], states[:, 3], "r--", lw=1.4,
+               label=f"repelling cycle a* = {repelling['amplitude']:.3f} rad")
     for run, color in zip(runs, ("C0", "C1")):
         ax[2].plot(run["states"][:, 1], run["states"][:, 3], color=color, lw=0.25,
                    label=rf"held model, $\varepsilon$ = {RUN_EPS:g}, a = {run['measured'][0]:.2f}")
@@ -149,34 +173,39 @@ def main(output_dir: str = "output", quick: bool = False) -> Path:
     for spin in QUICK_SPINS if quick else SPINS:
         ds = nc.drift(spin, max_amplitude=2.6)
         families[spin] = ds
-        separatrix = nc.separatrix(ds)
+        found = nc.cycles(ds)
         fold = float(nc.amplitude_of(ds)[ds.fold.values == 1].max()) if ds.fold.values.any() else math.nan
-        line = (f"{spin:g} rad/s: {ds.attrs['message']}; family folds at a = {fold:.4f} rad; separatrix "
-                f"{separatrix['status']}")
-        if separatrix["status"] != "completed":
-            without.append((spin, separatrix["status"]))
+        kinds = ", ".join(f"{c['kind']} at a = {c['amplitude']:.4f} rad" for c in found["cycles"]) or found["status"]
+        line = f"{spin:g} rad/s: {ds.attrs['message']}; family folds at a = {fold:.4f} rad; cycles: {kinds}"
+        repelling = nc.repelling_cycle(ds)
+        if "amplitude" not in repelling:
+            without.append((spin, repelling["status"]))
             print(line, flush=True)
             continue
-        held = held_cycle(ds, spin, separatrix)
-        line += (f" a* = {separatrix['amplitude']:.4f} rad, T = {separatrix['period']:.4f} s; held model at eps "
-                 f"{ORBIT_EPS:g}: {held['status']}")
+        held = held_cycle(ds, spin, repelling)
+        line += f"; held model at eps {ORBIT_EPS:g}: {held['status']}"
         if held["status"] == "converged":
-            line += (f", a = {held['amplitude']:.4f} rad, T = {held['period']:.4f} s, family multiplier "
-                     f"{held['family_multiplier']:.5f}")
+            line += (f", a = {held['amplitude']:.4f} rad, T = {held['period']:.4f} s (drift: "
+                     f"{repelling['period']:.4f} s), family multiplier {held['family_multiplier']:.5f}")
         print(line, flush=True)
         if held["status"] == "converged":
-            rows.append({"spin": spin, **separatrix, "fold": fold, "held": held})
+            rows.append({"spin": spin, **repelling, "fold": fold, "held": held})
+    fold = nc.fold_of_cycles()
+    print(f"fold of cycles: {fold}; omega_c {cs.omega_critical().omega_critical:.6f} rad/s", flush=True)
+    near = zoom(ZOOM_SPINS[::4] if quick else ZOOM_SPINS)
+    for spin, kind, amplitude in near:
+        print(f"  {spin:g} rad/s: {kind} cycle at a = {amplitude:.4f} rad", flush=True)
     portrait = families[PORTRAIT_SPIN]
-    star = nc.separatrix(portrait)["amplitude"]
+    star = nc.repelling_cycle(portrait)["amplitude"]
     runs = [held_run(portrait, PORTRAIT_SPIN, star + sign * RUN_OFFSET) for sign in (-1.0, 1.0)]
     for run in runs:
         print(f"held model at {PORTRAIT_SPIN:g} rad/s, eps {RUN_EPS:g} m/s, a = {run['measured'][0]:.4f} rad: after "
               f"eps t = {RUN_SLOW_TIME:g} m a = {run['measured'][-1]:.4f} rad, the averaged drift gives "
               f"{run['averaged'][-1]:.4f} rad (largest difference "
               f"{np.abs(run['measured'] - run['averaged']).max():.4f} rad)", flush=True)
-    curve = td.save(curve_dataset(rows, without), out / "nutation_cycles.nc")
+    curve = td.save(curve_dataset(rows, without, fold), out / "nutation_cycles.nc")
     td.save(portrait, out / f"nutation_family_{PORTRAIT_SPIN:g}.nc")
-    figure(families, rows, runs, curve.with_name("nutation_cycles.png"))
+    figure(families, rows, runs, near, fold, curve.with_name("nutation_cycles.png"))
     return curve
 
 

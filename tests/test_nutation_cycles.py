@@ -67,24 +67,44 @@ def test_small_nutations_drift_at_the_closed_form_rate(spin):
     """-d a / d(eps t) / a -> Re lambda / eps of the nutation (C3) as a -> 0 (a cubic in a fitted: the friction
     law holds |lambda_T|, which grows like |a|, so the drift is not odd in a)."""
     ds = nc.drift(spin, max_amplitude=0.6, max_points=30)
-    a, rate = nc.amplitude_of(ds), -ds.drift_rate.values
+    a, rate = nc.amplitude_of(ds), ds.amplitude_rate.values
     use = ds.drift_valid.values.astype(bool) & (a < 0.5)
     intercept = np.polyfit(a[use], rate[use] / a[use], 3)[-1]
     assert intercept == pytest.approx(cs.rates(spin)["rate_nutation"], rel=2e-3)
 
 
-def test_the_critical_spin_is_a_subcritical_hopf_point(drift_30_5):
-    below = nc.separatrix(nc.drift(30.0, max_amplitude=1.0, max_points=40))
-    assert below["status"] == "none_decays"
-    above = nc.separatrix(drift_30_5)
-    assert above["status"] == "completed" and 0.5 < above["amplitude"] < 2.0
+def test_the_hopf_point_is_supercritical_and_a_fold_of_cycles_follows_it_closely():
+    """Below omega_c the nutation grows at every amplitude (30.0 rad/s) until, 0.004 rad/s below omega_c, an
+    attracting and a repelling cycle appear together; the attracting one shrinks into the spin at omega_c, the
+    repelling one goes on above it. Both are the held model's own periodic orbits (eps = 1e-3 m/s): the
+    multiplier along the family is below 1 on the first and above 1 on the second."""
+    assert nc.cycles(nc.drift(30.0, max_amplitude=1.0, max_points=40))["status"] == "none_decays"
+    fold = nc.fold_of_cycles()
+    omega_c = cs.omega_critical().omega_critical
+    assert fold["status"] == "completed" and omega_c - 0.01 < fold["spin"] < omega_c
+    spin = 30.229
+    ds = nc.drift(spin, max_amplitude=0.6, max_points=40)
+    found = nc.cycles(ds)["cycles"]
+    assert [c["kind"] for c in found] == ["attracting", "repelling"]
+    a = nc.amplitude_of(ds)
+    for cycle, side in zip(found, (-1.0, 1.0)):
+        k = int(np.argmin(np.abs(a - cycle["amplitude"])))
+        orbit = dy.find_orbit(held_spin.system(), ds.start.values[k], float(ds.period.values[k]),
+                              nc._pars(spin, None, 1e-3))
+        assert orbit.converged, orbit.message
+        assert 0.5 * math.pi - orbit.samples[:, 1].min() == pytest.approx(cycle["amplitude"], abs=0.02)
+        real = orbit.multipliers[np.abs(orbit.multipliers.imag) < 1e-9].real
+        family = real[np.argsort(np.abs(real - 1))[1]]  # the nontrivial real multiplier next to the flow's 1
+        assert np.sign(family - 1.0) == side
+    above = nc.cycles(nc.drift(30.5, max_amplitude=2.6))["cycles"]
+    assert [c["kind"] for c in above] == ["repelling"]
 
 
-def test_the_separatrix_is_the_held_models_own_unstable_cycle(drift_30_5):
+def test_the_repelling_cycle_is_the_held_models_own_periodic_orbit(drift_30_5):
     """Shooting at eps > 0 finds a periodic orbit at a* + O(eps), whose multiplier along the family is
-    exp(eps T d(drift)/da) > 1: the cycle repels in the amplitude."""
-    star = nc.separatrix(drift_30_5)
-    a, rate = nc.amplitude_of(drift_30_5), -drift_30_5.drift_rate.values
+    exp(eps T d(rate)/da) > 1: the cycle repels in the amplitude."""
+    star = nc.repelling_cycle(drift_30_5)
+    a, rate = nc.amplitude_of(drift_30_5), drift_30_5.amplitude_rate.values
     k = int(np.argmin(np.abs(a - star["amplitude"])))
     slope = (rate[k + 1] - rate[k - 1]) / (a[k + 1] - a[k - 1])
     errors = []
@@ -95,7 +115,7 @@ def test_the_separatrix_is_the_held_models_own_unstable_cycle(drift_30_5):
         assert orbit.period == pytest.approx(star["period"], rel=1e-3)
         errors.append(abs(0.5 * math.pi - orbit.samples[:, 1].min() - star["amplitude"]))
         real = orbit.multipliers[np.abs(orbit.multipliers.imag) < 1e-9].real
-        family = real[np.argsort(np.abs(real - 1))[1]]  # the nontrivial real multiplier next to the flow's 1
+        family = real[np.argsort(np.abs(real - 1))[1]]
         assert math.log(family) / (eps * orbit.period) == pytest.approx(slope, rel=0.05)
     assert errors[1] < 2e-3 and errors[1] < errors[0]
 
@@ -105,8 +125,8 @@ def test_the_averaged_drift_follows_the_held_model(drift_30_5):
     """Runs of the held model (eps 0.01 m/s, 20 s) inside and outside the separatrix: the nutation decays and grows
     as d a / d(eps t) = drift(a) says, turning point by turning point."""
     ds = drift_30_5
-    a, rate = nc.amplitude_of(ds), -ds.drift_rate.values
-    star = nc.separatrix(ds)["amplitude"]
+    a, rate = nc.amplitude_of(ds), ds.amplitude_rate.values
+    star = nc.repelling_cycle(ds)["amplitude"]
     keep = ds.drift_valid.values.astype(bool) & (np.arange(a.size) < np.flatnonzero(ds.fold.values)[0])
     order = np.argsort(a[keep])
     eps = 0.01
@@ -132,10 +152,10 @@ def test_a_disk_it_was_not_built_on_has_the_same_subcritical_hopf_point():
     disk = Disk.from_geometry().with_eccentricity(3.5e-3)
     setup = Setup(disk=disk)
     omega_c = cs.omega_critical(disk).omega_critical
-    assert nc.separatrix(nc.drift(omega_c - 0.2, setup, max_amplitude=1.5, max_points=40))["status"] == "none_decays"
+    assert nc.cycles(nc.drift(omega_c - 0.2, setup, max_amplitude=1.5, max_points=40))["status"] == "none_decays"
     ds = nc.drift(omega_c + 0.3, setup, max_amplitude=2.0, max_points=60)
-    star = nc.separatrix(ds)
-    assert star["status"] == "completed"
+    star = nc.repelling_cycle(ds)
+    assert star["kind"] == "repelling"
     k = int(np.argmin(np.abs(nc.amplitude_of(ds) - star["amplitude"])))
     orbit = dy.find_orbit(held_spin.system(), ds.start.values[k], float(ds.period.values[k]),
                           nc._pars(omega_c + 0.3, setup, 0.005))
@@ -161,3 +181,6 @@ def test_bad_spins_are_refused_in_one_line():
         nc.family(10.0)
     with pytest.raises(ParameterError, match="max_amplitude"):
         nc.family(31.0, max_amplitude=4.0)
+    with pytest.raises(ParameterError, match="nutation_cycles.drift"):
+        nc.cycles(nc.family(31.0, max_amplitude=0.5, max_points=10))  # a family without its drift
+    assert nc.family(np.float32(31.0), max_amplitude=0.3, max_points=5).sizes["orbit"] > 1

@@ -13,6 +13,7 @@ import heyoka as hy
 import numpy as np
 import pytest
 from scipy.integrate import quad
+from scipy.special import ellipk
 
 from tippedisk_analysis import dynamics as dy
 from tippedisk_analysis.dynamics.symmetric_families import Shooting, family_drift, symmetric_family
@@ -105,3 +106,57 @@ def test_bad_requests_are_refused_in_one_line(family):
         family_drift(system, ds.assign_attrs(config=ds.attrs["config"].replace('"p": 0.0', '"p": 0.1')), SHOOTING, "p")
     with pytest.raises(ParameterError, match="symmetric_family"):
         family_drift(system, ds.assign_attrs(kind="continuation"), SHOOTING, "p")
+
+
+# ---------------------------------------------------------------- a system it was not built on: the pendulum
+PENDULUM = Shooting(fixed={"v": 0.0}, vary="x", section=dy.Event("turn", v, "positive"), period_factor=2.0)
+
+
+def pendulum(alpha: float = 1.0, beta: float = 2.0) -> dy.System:
+    """x'' = -sin x + p (beta cos x - alpha) x': at p = 0 the librations with amplitude a (turning at x = +-a)
+    have the period 4 K(sin^2(a/2)); one revolution changes H = v^2/2 - cos x by p times the integral of
+    (beta cos x - alpha) v dx, and H = -cos a moves a by dH / sin a."""
+    return dy.System("pendulum_melnikov", [x, v], [v, -hy.sin(x) + hy.par[0] * (hy.par[2] * hy.cos(x) - hy.par[1]) * v],
+                     parameters={"p": 0.0, "alpha": alpha, "beta": beta})
+
+
+def pendulum_drift(a: float, alpha: float = 1.0, beta: float = 2.0) -> float:
+    def integrand(phi):  # x = a sin(phi): no square root vanishes at the turning points
+        s = a * math.sin(phi)
+        return (beta * math.cos(s) - alpha) * math.sqrt(2 * (math.cos(s) - math.cos(a))) * a * math.cos(phi)
+    return 2.0 * quad(integrand, -0.5 * math.pi, 0.5 * math.pi, epsabs=1e-13, epsrel=1e-12)[0] / math.sin(a)
+
+
+def test_the_pendulum_periods_and_drift_on_a_coarse_grid():
+    """Three members far apart, as a user might pick them: the drift of the middle one is the quadrature's (the
+    family's tangent comes from re-shot members, not from the grid)."""
+    system = pendulum()
+    amplitudes = [0.8, 1.0, 1.5, 2.0, 2.8]
+    ds = symmetric_family(system, PENDULUM, (1.0, None), (0.0, 3.0), amplitudes=amplitudes)
+    assert np.allclose(ds.period.values, [4 * ellipk(math.sin(a / 2) ** 2) for a in amplitudes], rtol=1e-10)
+    assert ds.closure_error.values.max() < 1e-9
+    drift = family_drift(system, ds, PENDULUM, "p")
+    assert drift.drift_valid.values[1:-1].all(), drift.attrs["message"]
+    for k in (1, 2, 3):
+        # the amplitude is x at the start, x = +a: the turning point moves by the quadrature's da
+        assert drift.drift.values[k] == pytest.approx(pendulum_drift(amplitudes[k]), rel=1e-4)
+
+
+def test_a_section_the_start_lies_on_or_a_wrong_period_factor_is_refused():
+    system = pendulum()
+    wrong_direction = Shooting(fixed={"v": 0.0}, vary="x", section=dy.Event("turn", v, "negative"), period_factor=2.0)
+    with pytest.raises(ParameterError, match="half its period"):  # met after a whole period: T counted twice
+        symmetric_family(system, wrong_direction, (1.0, None), (0.0, 3.0), amplitudes=[1.0])
+    too_large = Shooting(fixed={"v": 0.0}, vary="x", section=dy.Event("turn", v, "any"), period_factor=4.0)
+    with pytest.raises(ParameterError, match="half its period"):
+        symmetric_family(system, too_large, (1.0, None), (0.0, 3.0), amplitudes=[1.0])
+    too_small = Shooting(fixed={"v": 0.0}, vary="x", section=dy.Event("turn", v, "positive"), period_factor=1.0)
+    with pytest.raises(ParameterError, match="does not close"):
+        symmetric_family(system, too_small, (1.0, None), (0.0, 3.0), amplitudes=[1.0])
+    with pytest.raises(ParameterError, match="leave the bounds"):
+        symmetric_family(system, PENDULUM, (1.0, None), (0.0, 1.0), amplitudes=[0.5, 2.0])
+    ds = symmetric_family(system, PENDULUM, (1.0, None), (0.0, 3.0), amplitudes=[0.9, 1.0, 1.1])
+    with pytest.raises(ParameterError, match="computed on"):
+        family_drift(duffing_vdp(), ds, PENDULUM, "p")
+    with pytest.raises(ParameterError, match="two different small"):
+        family_drift(system, ds, PENDULUM, "p", values=1e-5)

@@ -1,4 +1,4 @@
-"""The nutation cycles of the held-spin model: the critical spin is a subcritical Hopf point (docs/inversion.md).
+"""The nutation cycles of the held-spin model: how large a nutation the inverted spin damps (docs/inversion.md).
 
 At eps = 0 the held model (:func:`tippedisk_analysis.models.held_spin.rolling_system`: the disk rolls, its spin
 about the vertical held at Omega) is reversible, and its inverted spin is a centre of two pairs: the nutation
@@ -10,8 +10,10 @@ turning point says how far S swings from straight above G (a = pi: S straight be
 Friction moves a start across the family: per revolution its amplitude changes by eps times the Melnikov drift
 of the orbit, O(eps) per period, so O(1) per unit slow time eps t (``drift_rate`` per unit eps is d a / d(eps t)).
 For small amplitudes it is (C3)'s real part of the nutation pair, which turns negative at omega_c (the Hopf
-point HOPF2 of the held model). Where it changes sign along the family a nutation cycle survives friction: the
-**separatrix** at that held spin between starts whose nutation decays (smaller amplitude) and grows (larger).
+point HOPF2 of the held model). Where it changes sign along the family a nutation cycle survives friction
+(:func:`cycles`). Above omega_c one is left, repelling: the nutation decays inside it and grows outside, in the
+amplitude averaged over the phase (the precession grows on both sides at every eps > 0). It appears at a fold of
+cycles just below omega_c (:func:`fold_of_cycles`), where it meets the small attracting cycle born at omega_c.
 
 The lower spin (S below G) is a saddle-centre of the rolling held model. At one held spin its unstable
 manifold reaches the top with beta_dot = 0, on the fixed plane of a reversor, and so returns to it: a symmetric
@@ -22,6 +24,7 @@ from __future__ import annotations
 
 import copy
 import math
+import numbers
 
 import numpy as np
 import xarray as xr
@@ -33,9 +36,10 @@ from ..dynamics.symmetric_families import Shooter, Shooting, family_drift, symme
 from ..errors import ParameterError
 from ..models import held_spin
 from ..parameters import Setup
-from . import inversion
+from . import critical_spin, inversion
 
-__all__ = ["SHOOTING", "EPS_PROBES", "family", "drift", "separatrix", "amplitude_of", "homoclinic_spin"]
+__all__ = ["SHOOTING", "EPS_PROBES", "family", "drift", "cycles", "repelling_cycle", "fold_of_cycles",
+           "amplitude_of", "homoclinic_spin"]
 
 _gamma = held_spin.rolling_system().variables[1]
 SHOOTING = Shooting(fixed={"beta": 0.5 * math.pi, "gamma_dot": 0.0}, vary="gamma", free="beta_dot",
@@ -43,13 +47,13 @@ SHOOTING = Shooting(fixed={"beta": 0.5 * math.pi, "gamma_dot": 0.0}, vary="gamma
                     period_factor=4.0, t_max=60.0)
 """From a turning point of gamma with the disk upright to the top, where beta_dot = 0 (both reversors' planes)."""
 EPS_PROBES = (1e-5, 2e-5)  # m/s: the two values of eps at which the drift is measured (they must agree)
-START_AMPLITUDE = 0.05  # rad: the family's first member, from the linearisation
+START_AMPLITUDE = 0.01  # rad: the family's first member, from the linearisation
 FREE_BOUNDS = (-0.5, 30.0)  # rad/s: beta_dot at the start; the family's lower branch past its fold leaves it
 
 
 def _pars(spin: float, setup: Setup | None, eps: float = 0.0) -> np.ndarray:
     setup = Setup() if setup is None else setup
-    if not (isinstance(spin, int | float) and math.isfinite(spin) and spin > 0):
+    if not (isinstance(spin, numbers.Real) and math.isfinite(spin) and spin > 0):
         raise ParameterError(f"spin = {spin!r}: give the held spin in rad/s, e.g. 30.5")
     pars = inversion.parameters("held", setup, float(spin)).copy()
     pars[held_spin.system().parameter_index("eps")] = eps
@@ -72,8 +76,8 @@ def family(spin: float, setup: Setup | None = None, *, max_amplitude: float = 3.
     w, V = np.linalg.eig(J)
     upper = w.imag > 1e-9
     if upper.sum() != 2 or np.abs(w.real).max() > 1e-9 * np.abs(w).max():
-        raise ParameterError(f"at {spin:g} rad/s the inverted spin is no centre of two pairs (eigenvalues {w}); "
-                             "the nutation family exists above the spin where the pairs collide (18.3 rad/s)")
+        raise ParameterError(f"at {spin:g} rad/s the inverted spin is no centre of two pairs; the nutation family "
+                             "exists above the spin where the pairs collide (18.3 rad/s for Tables 1-2)")
     k = np.flatnonzero(upper)[np.argmin(w.imag[upper])]  # the slower pair: the nutation
     v = V[:, k] * np.exp(-1j * (np.angle(V[:, k][3]) - 0.5 * math.pi))  # gamma_dot's component imaginary
     b0 = -v.real[2] / v.real[1] * START_AMPLITUDE  # beta_dot at the turning point gamma = pi/2 - a
@@ -84,38 +88,85 @@ def family(spin: float, setup: Setup | None = None, *, max_amplitude: float = 3.
 
 
 def drift(spin: float, setup: Setup | None = None, **kwargs) -> xr.Dataset:
-    """:func:`family` with each orbit's Melnikov drift under friction (per unit eps: ``drift_rate`` is
-    d a / d(eps t) in rad/m, but stored as the change of gamma at the turning point, so its sign is the
-    opposite of a's: positive = the nutation decays)."""
+    """:func:`family` with each orbit's Melnikov drift under friction (:func:`.family_drift`, per unit eps) and
+    ``amplitude_rate`` = d a / d(eps t) [rad/m], the nutation amplitude's rate in the slow time (negative: the
+    nutation decays; the generic ``drift_rate`` is that of gamma at the start, the opposite sign)."""
     ds = family(spin, setup, **kwargs)
-    return family_drift(held_spin.system(), ds, SHOOTING, "eps", EPS_PROBES, unperturbed=held_spin.rolling_system())
+    out = family_drift(held_spin.system(), ds, SHOOTING, "eps", EPS_PROBES, unperturbed=held_spin.rolling_system())
+    out["amplitude_rate"] = ("orbit", -out.drift_rate.values, {"units": "rad m-1", "long_name": "d a / d(eps t): "
+                             "the nutation amplitude's rate in the slow time (negative: the nutation decays)"})
+    return out
 
 
-def separatrix(ds: xr.Dataset) -> dict:
-    """The nutation cycle that survives friction in a :func:`drift` dataset: the amplitude [rad] where the
-    drift changes sign on the family's first branch (up to its fold), interpolated between checked orbits;
-    {"amplitude", "period" [s], "status"}: ``completed``, ``none_decays`` (the drift grows the nutation
-    everywhere: below omega_c), ``all_decay`` (it decays everywhere up to the fold) or ``unchecked`` (a sign
-    change between orbits whose drift is not checked)."""
-    a, rate = amplitude_of(ds), -ds.drift_rate.values  # d a / d(eps t): negative = decaying
+def _check_drift(ds) -> None:
+    if not (isinstance(ds, xr.Dataset) and ds.attrs.get("kind") == "symmetric_family"
+            and ds.attrs.get("system") == held_spin.rolling_system().name and "amplitude_rate" in ds):
+        raise ParameterError("give a dataset of nutation_cycles.drift (the held model's nutation family with its "
+                             "drift)")
+
+
+def cycles(ds: xr.Dataset) -> dict:
+    """The nutation cycles that survive friction in a :func:`drift` dataset: the amplitudes [rad] where
+    d a / d(eps t) changes sign on the family's first branch (up to its first fold), interpolated between
+    checked orbits; {"cycles": [{"amplitude", "period" [s], "kind"}], "status"}. ``kind`` is ``repelling`` (the
+    nutation decays inside it and grows outside, in the averaged amplitude) or ``attracting``. Status
+    ``completed`` (at least one), ``none_decays`` (the nutation grows at every amplitude), ``all_decay`` (it
+    decays at every amplitude up to the fold) or ``unchecked`` (a sign change next to an orbit whose drift is not
+    checked)."""
+    _check_drift(ds)
+    a, rate = amplitude_of(ds), ds.amplitude_rate.values
     valid = ds.drift_valid.values.astype(bool)
     first = np.flatnonzero(ds.fold.values)
     end = int(first[0]) if first.size else len(a)
     idx = [k for k in range(end) if valid[k]]
     if not idx:
-        return {"amplitude": math.nan, "period": math.nan, "status": "unchecked"}
+        return {"cycles": [], "status": "unchecked"}
     signs = np.sign(rate[idx])
-    change = np.flatnonzero(signs[1:] != signs[:-1])
-    if change.size == 0:
-        return {"amplitude": math.nan, "period": math.nan,
-                "status": "all_decay" if signs[0] < 0 else "none_decays"}
-    i, j = idx[change[0]], idx[change[0] + 1]
-    if any(not valid[k] for k in range(i, j + 1)):
-        return {"amplitude": math.nan, "period": math.nan, "status": "unchecked"}
-    w = rate[i] / (rate[i] - rate[j])
-    return {"amplitude": float(a[i] + w * (a[j] - a[i])),
-            "period": float(ds.period.values[i] + w * (ds.period.values[j] - ds.period.values[i])),
-            "status": "completed"}
+    found = []
+    for c in np.flatnonzero(signs[1:] != signs[:-1]):
+        i, j = idx[c], idx[c + 1]
+        if j != i + 1:
+            return {"cycles": [], "status": "unchecked"}
+        w = rate[i] / (rate[i] - rate[j])
+        found.append({"amplitude": float(a[i] + w * (a[j] - a[i])),
+                      "period": float(ds.period.values[i] + w * (ds.period.values[j] - ds.period.values[i])),
+                      "kind": "repelling" if rate[j] > rate[i] else "attracting"})
+    if found:
+        return {"cycles": found, "status": "completed"}
+    return {"cycles": [], "status": "all_decay" if signs[0] < 0 else "none_decays"}
+
+
+def repelling_cycle(ds: xr.Dataset) -> dict:
+    """The largest repelling cycle of :func:`cycles` ({"amplitude", "period", "kind"}), or {"status": ...} of
+    :func:`cycles` when there is none."""
+    found = cycles(ds)
+    repelling = [c for c in found["cycles"] if c["kind"] == "repelling"]
+    return repelling[-1] if repelling else {"status": found["status"] if found["status"] != "completed" else
+                                            "no_repelling_cycle"}
+
+
+def fold_of_cycles(setup: Setup | None = None, bracket: tuple | None = None, xtol: float = 1e-4) -> dict:
+    """The held spin [rad/s] below omega_c at which the attracting and the repelling nutation cycle meet (a fold
+    of cycles): bisection of whether d a / d(eps t) < 0 anywhere on the family's first branch below amplitude
+    0.6 rad (``bracket`` default: omega_c - 0.05 to omega_c). {"spin", "low", "high", "status"}: ``completed``,
+    ``no_fold`` (cycles at both ends or at neither: the bracket holds no fold)."""
+    setup = Setup() if setup is None else setup
+    if bracket is None:
+        omega_c = critical_spin.omega_critical(setup.disk, setup.gravity).omega_critical
+        bracket = (omega_c - 0.05, omega_c)
+    low, high = map(float, bracket)
+
+    def has_cycles(spin):
+        ds = drift(spin, setup, max_amplitude=0.6, max_points=40)
+        a, rate, valid = amplitude_of(ds), ds.amplitude_rate.values, ds.drift_valid.values.astype(bool)
+        return bool(np.any(rate[valid] / a[valid] < 0))
+
+    if has_cycles(low) or not has_cycles(high):
+        return {"spin": math.nan, "low": low, "high": high, "status": "no_fold"}
+    while high - low > xtol:
+        mid = 0.5 * (low + high)
+        low, high = (low, mid) if has_cycles(mid) else (mid, high)
+    return {"spin": 0.5 * (low + high), "low": low, "high": high, "status": "completed"}
 
 
 MANIFOLD_OFFSET = 1e-8  # start of the unstable manifold: this far from the lower spin along its eigenvector
@@ -130,8 +181,8 @@ def _top_of_unstable_manifold(spin: float, setup: Setup | None, offset: float = 
     w, V = np.linalg.eig(system.jacobian(lower, pars))
     k = int(np.argmax(w.real))
     if not (abs(w[k].imag) < 1e-9 and w[k].real > 1e-6):
-        raise ParameterError(f"at {spin:g} rad/s the lower spin has no real unstable eigenvalue ({w}); it is no "
-                             "saddle there")
+        raise ParameterError(f"at {spin:g} rad/s the lower spin has no real unstable eigenvalue: it is no saddle "
+                             "there; give another bracket")
     v = V[:, k].real / np.linalg.norm(V[:, k].real)
     return Shooter(system, SHOOTING).run(lower + offset * np.sign(v[1]) * v, pars)
 

@@ -48,6 +48,9 @@ FD_STEP = 1e-7  # relative finite-difference step of the shooting Jacobian and o
 RESONANCE_GAP = 0.05  # an eigenvalue of DP0 closer than this to 1 leaves the drift undefined
 DRIFT_AGREEMENT = 1e-2  # the drift per unit parameter at the two parameter values must agree to this (relative)
 SKIP = 0.25  # fraction of the period run before the return map looks for the section
+MIN_TIME = 1e-9  # a section crossing this soon after the start is the start itself (heyoka sees a zero at t = 0)
+CLOSURE_TOL = 1e-6  # a member must return to its start after its period to this (state scale, relative)
+ONE_TOL = 1e-3  # the return map's eigenvalue for the family tangent must lie this close to 1
 
 
 @dataclass(frozen=True)
@@ -113,9 +116,48 @@ class Shooter:
         ta = copy.deepcopy(self.to_section)
         ta.time, ta.state[:], ta.pars[:] = t0, x0, pars[: len(ta.pars)]
         outcome = ta.propagate_until(self.shooting.t_max)[0]
+        if System.stopping_event(outcome, (self.shooting.section,)) == 0 and ta.time - t0 <= MIN_TIME * max(
+                1.0, abs(t0)):  # the start lies on the section: go on (heyoka's cooldown passes the start)
+            outcome = ta.propagate_until(self.shooting.t_max)[0]
         if System.stopping_event(outcome, (self.shooting.section,)) != 0 or not np.all(np.isfinite(ta.state)):
             return None
         return ta.state.copy(), ta.time
+
+    def closure(self, x0: np.ndarray, period: float, pars: np.ndarray) -> float:
+        """max |x(period) - x0| / (scale + |x0|): how well an orbit closes after ``period``."""
+        ta = copy.deepcopy(self.plain)
+        ta.time, ta.state[:], ta.pars[:] = 0.0, x0, pars[: len(ta.pars)]
+        ta.propagate_until(period)
+        scale = np.asarray(self.system.state_scale) + np.abs(x0)
+        return float(np.max(np.abs(ta.state - x0) / scale)) if np.all(np.isfinite(ta.state)) else math.inf
+
+    def solve_free(self, amplitude: float, guess: float, pars: np.ndarray) -> float:
+        """The free start coordinate of the member with ``amplitude``, by secant steps from ``guess`` (NaN if
+        they fail)."""
+        condition = self.index[self.shooting.condition]
+
+        def residual(b):
+            hit = self.run(self.start(amplitude, b), pars)
+            return np.nan if hit is None else hit[0][condition]
+
+        try:
+            value = newton(residual, guess, tol=1e-14, maxiter=50)
+        except (RuntimeError, ValueError, OverflowError):
+            return math.nan
+        return float(value) if math.isfinite(value) and abs(residual(value)) < 1e-9 else math.nan
+
+    def tangent(self, amplitude: float, free: float | None, pars: np.ndarray) -> np.ndarray | None:
+        """d(crossing state)/d(amplitude) along the family, by central differences of re-shot members (the free
+        coordinate solved again at each); None where a neighbour cannot be shot."""
+        h = 1e-6 * max(1.0, abs(amplitude))
+        ends = []
+        for a in (amplitude - h, amplitude + h):
+            b = None if free is None else self.solve_free(a, free, pars)
+            hit = None if b is not None and not math.isfinite(b) else self.run(self.start(a, b), pars)
+            if hit is None:
+                return None
+            ends.append(hit[0])
+        return (ends[1] - ends[0]) / (2 * h)
 
 
 class _FamilyProblem(Problem):
@@ -170,14 +212,16 @@ def symmetric_family(system: System, shooting: Shooting, start: tuple, bounds: t
         values = np.asarray(amplitudes if amplitudes is not None else [], dtype=float)
         if values.ndim != 1 or values.size == 0:
             raise ParameterError("a planar shooting (no free state) needs the amplitudes of its orbits")
+        if not np.all((values >= low) & (values <= high)):
+            raise ParameterError(f"amplitudes {values.min():.6g}-{values.max():.6g} leave the bounds {bounds}; give "
+                                 "amplitudes inside them")
         rows = [(a, None, shooter.run(shooter.start(a, None), pars)) for a in values]
         folds, status, message = set(), "completed", f"{len(rows)} orbits"
     else:
         problem = _FamilyProblem(shooter, pars, bounds, scale, free_bounds)
-        try:  # the start's free coordinate, solved at its amplitude from the guess (secant steps)
-            free = newton(lambda b: problem.residual(np.array([b, start[0]]))[0], start[1], tol=1e-14, maxiter=50)
-        except (RuntimeError, ValueError, OverflowError):
-            free = math.nan
+        if len(start) != 2 or not all(isinstance(v, int | float) and math.isfinite(v) for v in start):
+            raise ParameterError(f"start = {start!r}: give (amplitude, a guess of {shooting.free}) as two numbers")
+        free = shooter.solve_free(float(start[0]), float(start[1]), pars)  # solved at the start's amplitude
         if not math.isfinite(free):
             raise ParameterError(f"no orbit of the family starts at {shooting.vary} = {start[0]:.6g} near "
                                  f"{shooting.free} = {start[1]:.6g}; give a better guess (e.g. from the linearisation)")
@@ -194,6 +238,18 @@ def symmetric_family(system: System, shooting: Shooting, start: tuple, bounds: t
     starts = np.array([shooter.start(a, b) for a, b, _hit in rows])
     crossings = np.array([hit[0] for _a, _b, hit in rows])
     periods = np.array([shooting.period_factor * hit[1] for _a, _b, hit in rows])
+    closure = np.array([shooter.closure(x, T, pars) for x, T in zip(starts, periods)])
+    half = shooter.closure(starts[0], 0.5 * periods[0], pars)
+    if half <= CLOSURE_TOL:
+        raise ParameterError(f"the orbit with amplitude {rows[0][0]:.6g} closes after half its period already: "
+                             f"the section {shooting.section.name!r} is met at a multiple of the period (its "
+                             f"direction) or period_factor = {shooting.period_factor:g} is too large")
+    if not np.all(closure <= CLOSURE_TOL):
+        k = int(np.argmax(closure))
+        raise ParameterError(f"the orbit with amplitude {rows[k][0]:.6g} does not close after period_factor x the time "
+                             f"to the section (error {closure[k]:.2g}): the section is not where the orbit meets the "
+                             "second fixed plane, or period_factor is wrong (4 for two reversors' planes, 2 for one; "
+                             "the section's direction must skip the start)")
     fold = np.array([k in folds for k in range(len(rows))], dtype=np.int8)
     units = system.units_of(shooting.vary)
     coords = {"orbit": index_coordinate("orbit", len(rows), "family member"), **state_coordinates(system)}
@@ -204,6 +260,7 @@ def symmetric_family(system: System, shooting: Shooting, start: tuple, bounds: t
         "crossing": (("orbit", "state"), crossings, mixed_units(f"state at the section {shooting.section.name}")),
         "period": ("orbit", periods, {"units": system.time_units, "long_name": "period"}),
         "fold": ("orbit", fold, flag_attrs("fold of the amplitude along the family", {"no": 0, "yes": 1})),
+        "closure_error": ("orbit", closure, {"units": "1", "long_name": "max |x(period) - x(0)| / (scale + |x(0)|)"}),
     }, coords=coords)
     config = {"fixed": shooting.fixed, "vary": shooting.vary, "free": shooting.free, "condition": shooting.condition,
               "section": shooting.section.name, "period_factor": shooting.period_factor, "bounds": list(bounds),
@@ -229,34 +286,49 @@ def family_drift(system: System, family: xr.Dataset, shooting: Shooting, paramet
                  values: tuple = (1e-5, 2e-5), unperturbed: System | None = None) -> xr.Dataset:
     """The Melnikov drift of every orbit of ``family`` (from :func:`symmetric_family` at the parameters stored in
     it, where ``parameter`` is 0) when ``parameter`` takes the small ``values``: ``drift`` [amplitude units per
-    revolution per unit parameter], ``drift_rate`` (the same per unit time), ``drift_check`` (relative difference
-    between the two values), ``resonance_gap`` (distance of DP0's nearest other eigenvalue from 1) and
-    ``drift_valid`` (1 where the gap exceeds RESONANCE_GAP, the two values agree to DRIFT_AGREEMENT and the
-    amplitude is not at a fold). The family's end members (no neighbours on both sides) are not evaluated.
+    revolution per unit parameter], ``drift_rate`` (the same per unit time), ``drift_check`` (difference between
+    the two values, relative to the larger of the drift and the family's median drift), ``resonance_gap``
+    (distance of the return map's nearest other eigenvalue from 1), ``branch_point`` (1 where another multiplier
+    passes 1 between the orbit and the next: the family branches there and the drift has a pole) and
+    ``drift_valid`` (1 where the return map has an eigenvalue within ONE_TOL of 1, the gap exceeds
+    RESONANCE_GAP, the two values agree to DRIFT_AGREEMENT, and the orbit is at no fold and next to no branch
+    point). The family tangent comes from re-shot members at
+    amplitude +- 1e-6 (relative). The family's end members are not evaluated.
     ``unperturbed``: the same system written with ``parameter`` = 0 in its expressions, where the family was
     computed on it (heyoka's Taylor coefficients of 0 * g overflow where g is singular, and 0 * inf is no 0);
     it runs the return map at 0, ``system`` at the small values."""
-    if family.attrs.get("kind") != "symmetric_family":
+    if not isinstance(family, xr.Dataset) or family.attrs.get("kind") != "symmetric_family":
         raise ParameterError("family: give a dataset of dynamics.symmetric_families.symmetric_family")
-    shooter = Shooter(system, shooting)
-    base_shooter = shooter if unperturbed is None else Shooter(unperturbed, shooting)
     config = json.loads(family.attrs["config"])
+    base_system = system if unperturbed is None else unperturbed
+    for candidate in (system, base_system):
+        if sorted(candidate.parameter_names) != sorted(config["pars"]) or family.attrs.get("system") not in (
+                system.name, base_system.name):
+            raise ParameterError(f"the family was computed on {family.attrs.get('system')!r}, not on "
+                                 f"{candidate.name!r}; give the system it was computed on")
+    try:
+        values = tuple(float(v) for v in values)
+    except TypeError:
+        raise ParameterError(f"values = {values!r}: give two different small nonzero values of {parameter}") from None
+    if len(values) != 2 or not all(math.isfinite(v) and v != 0 for v in values) or values[0] == values[1]:
+        raise ParameterError(f"values = {values!r}: give two different small nonzero values of {parameter}")
+    shooter, base_shooter = Shooter(system, shooting), Shooter(base_system, shooting)
     pars = system.with_pars([config["pars"][n] for n in system.parameter_names])
     index = system.parameter_index(parameter)
     if pars[index] != 0.0:
         raise ParameterError(f"the family was computed at {parameter} = {pars[index]:g}; compute it at 0")
-    if len(values) != 2 or not all(math.isfinite(v) and v != 0 for v in values) or values[0] == values[1]:
-        raise ParameterError(f"values = {values!r}: give two different small nonzero values of {parameter}")
     crossings, periods = family.crossing.values, family.period.values
     amplitude = family.amplitude.values
+    free = family.start.sel(state=shooting.free).values if shooting.free else [None] * len(amplitude)
     n, size = system.n, len(amplitude)
-    drift = np.zeros((size, 2))
-    gap, valid = np.zeros(size), np.zeros(size, np.int8)
+    drift = np.full((size, 2), np.nan)
+    gap, transverse, no_one = np.zeros(size), np.zeros(size), np.zeros(size, bool)
     for k in range(1, size - 1):
         x0, period = crossings[k], periods[k]
         skip = SKIP * period
         base = base_shooter.run(x0, pars, skip)
-        if base is None:
+        tangent = base_shooter.tangent(amplitude[k], free[k], pars)
+        if base is None or tangent is None:
             continue
         D = np.zeros((n, n))
         for j in range(n):
@@ -268,41 +340,58 @@ def family_drift(system: System, family: xr.Dataset, shooting: Shooting, paramet
         else:
             w, left = np.linalg.eig(D.T)
             one = int(np.argmin(np.abs(w - 1.0)))
-            others = np.delete(w, one)
+            if abs(w[one] - 1.0) > ONE_TOL:  # two multipliers near 1 split (a fold or a resonance): no l
+                no_one[k] = True
+                continue
+            flow = int(np.argmin(np.abs(np.where(np.arange(n) == one, np.inf, w))))  # the flow's eigenvalue 0
+            others = np.delete(w, [one, flow])
             gap[k] = float(np.min(np.abs(others - 1.0))) if others.size else math.inf
+            transverse[k] = float(np.prod(others - 1.0).real) if others.size else 1.0
             ell = left[:, one].real
-            tangent = (crossings[k + 1] - crossings[k - 1]) / (amplitude[k + 1] - amplitude[k - 1])
             for i, value in enumerate(values):
                 perturbed = pars.copy()
                 perturbed[index] = value
                 hit = shooter.run(x0, perturbed, skip)
-                drift[k, i] = (np.nan if hit is None else
-                               float(ell @ (hit[0] - base[0]) / value / (ell @ tangent)))
-            agree = abs(drift[k, 0] - drift[k, 1]) <= DRIFT_AGREEMENT * max(abs(drift[k, 1]), 1e-12)
-            valid[k] = int(bool(np.all(np.isfinite(drift[k])) and agree and gap[k] > RESONANCE_GAP
-                                and not family.fold.values[k - 1: k + 2].any()))
+                if hit is not None:
+                    drift[k, i] = float(ell @ (hit[0] - base[0]) / value / (ell @ tangent))
     finite = np.all(np.isfinite(drift), axis=1)
+    typical = float(np.median(np.abs(drift[finite, 1]))) if finite.any() else 0.0
+    check = np.where(finite, np.abs(drift[:, 0] - drift[:, 1]) / np.maximum(np.abs(drift[:, 1]), max(typical, 1e-300)),
+                     np.inf)
+    branch = np.zeros(size, np.int8)
+    crossed = (transverse[1:-2] * transverse[2:-1] < 0)  # another multiplier passes 1 between k and k + 1
+    branch[1:-2] |= crossed
+    branch[2:-1] |= crossed
+    fold = family.fold.values
+    near_fold = np.array([fold[max(k - 1, 0): k + 2].any() for k in range(size)])
+    valid = (finite & (check <= DRIFT_AGREEMENT) & (gap > RESONANCE_GAP) & ~near_fold & (branch == 0)).astype(np.int8)
     drift[~finite] = 0.0
-    valid[~finite] = 0
-    check = np.abs(drift[:, 0] - drift[:, 1]) / np.maximum(np.abs(drift[:, 1]), 1e-300)
+    check[~finite] = 0.0
     units = _units_product(system.units_of(shooting.vary), system.units_of(parameter), -1)
     out = family.copy()
     out["drift"] = ("orbit", drift[:, 1], {"units": units, "long_name": f"change of the amplitude per revolution per "
                                            f"unit {parameter} (Melnikov), at {parameter} = {values[1]:g}"})
     out["drift_rate"] = ("orbit", drift[:, 1] / periods, {"units": _units_product(units, system.time_units, -1),
                                                           "long_name": f"drift per unit time per unit {parameter}"})
-    out["drift_check"] = ("orbit", check, {"units": "1", "long_name": f"relative difference of the drift at "
-                                           f"{parameter} = {values[0]:g} and {values[1]:g}"})
+    out["drift_check"] = ("orbit", check, {"units": "1", "long_name": f"difference of the drift at {parameter} = "
+                                           f"{values[0]:g} and {values[1]:g}, relative"})
     out["resonance_gap"] = ("orbit", gap, {"units": "1", "long_name": "distance from 1 of the return map's nearest "
                                            "other eigenvalue"})
+    out["branch_point"] = ("orbit", branch, flag_attrs("another multiplier passes 1 next to this orbit",
+                                                       {"no": 0, "yes": 1}))
     out["drift_valid"] = ("orbit", valid, flag_attrs("whether the drift is defined and checked (0: an end "
-                                                     "member, a fold, a resonance or a failed check)",
-                                                     {"no": 0, "yes": 1}))
-    n_valid = int(valid.sum())
+                                                     "member, a fold, a branch point, a resonance or a failed "
+                                                     "check)", {"no": 0, "yes": 1}))
+    n_valid, inner = int(valid.sum()), max(size - 2, 0)
+    inner_ = slice(1, -1)
+    reasons = {"no eigenvalue 1 of the return map": int(no_one.sum()),
+               "not finite": int((~finite & ~no_one)[inner_].sum()),
+               "nonlinear in " + parameter: int((finite & (check > DRIFT_AGREEMENT))[inner_].sum()),
+               "resonance": int((finite & (gap <= RESONANCE_GAP))[inner_].sum()),
+               "next to a fold": int(near_fold[inner_].sum()), "next to a branch point": int(branch[inner_].sum())}
+    failed = ", ".join(f"{count} {why}" for why, count in reasons.items() if count)
     status = "completed" if n_valid else "degenerate"
-    message = (f"drift of {n_valid} of {size} orbits checked (linear in {parameter} to {DRIFT_AGREEMENT:g}, no "
-               f"resonance within {RESONANCE_GAP:g}, no fold)" + ("" if n_valid else
-                                                                   "; none: give a family with more members"))
+    message = f"drift of {n_valid} of {inner} inner orbits checked" + (f" (not: {failed})" if failed else "")
     cfg = {**config, "parameter": parameter, "values": list(values)}
-    out.attrs = make_attrs("symmetric_family", cfg, status, message, system=system.name)
+    out.attrs = make_attrs("symmetric_family", cfg, status, message, system=family.attrs.get("system"))
     return out
