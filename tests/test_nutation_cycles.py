@@ -77,7 +77,8 @@ def test_the_hopf_point_is_supercritical_and_a_fold_of_cycles_follows_it_closely
     """Below omega_c the nutation grows at every amplitude (30.0 rad/s) until, 0.004 rad/s below omega_c, an
     attracting and a repelling cycle appear together; the attracting one shrinks into the spin at omega_c, the
     repelling one goes on above it. Both are the held model's own periodic orbits (eps = 1e-3 m/s): the
-    multiplier along the family is below 1 on the first and above 1 on the second."""
+    multiplier along the family is below 1 on the first and above 1 on the second. Just below omega_c the
+    attracting cycle lies below the family's first member, and the spin's own eigenvalues find it."""
     assert nc.cycles(nc.drift(30.0, max_amplitude=1.0, max_points=40))["status"] == "none_decays"
     fold = nc.fold_of_cycles()
     omega_c = cs.omega_critical().omega_critical
@@ -92,12 +93,14 @@ def test_the_hopf_point_is_supercritical_and_a_fold_of_cycles_follows_it_closely
         orbit = dy.find_orbit(held_spin.system(), ds.start.values[k], float(ds.period.values[k]),
                               nc._pars(spin, None, 1e-3))
         assert orbit.converged, orbit.message
-        assert 0.5 * math.pi - orbit.samples[:, 1].min() == pytest.approx(cycle["amplitude"], abs=0.02)
+        assert 0.5 * math.pi - orbit.samples[:, 1].min() == pytest.approx(cycle["amplitude"], abs=3e-3)
         real = orbit.multipliers[np.abs(orbit.multipliers.imag) < 1e-9].real
         family = real[np.argsort(np.abs(real - 1))[1]]  # the nontrivial real multiplier next to the flow's 1
         assert np.sign(family - 1.0) == side
     above = nc.cycles(nc.drift(30.5, max_amplitude=2.6))["cycles"]
     assert [c["kind"] for c in above] == ["repelling"]
+    tiny = nc.cycles(nc.drift(30.232, max_amplitude=0.6, max_points=40))["cycles"]
+    assert [c["kind"] for c in tiny] == ["attracting", "repelling"] and tiny[0]["amplitude"] < 0.02
 
 
 def test_the_repelling_cycle_is_the_held_models_own_periodic_orbit(drift_30_5):
@@ -184,3 +187,9 @@ def test_bad_spins_are_refused_in_one_line():
     with pytest.raises(ParameterError, match="nutation_cycles.drift"):
         nc.cycles(nc.family(31.0, max_amplitude=0.5, max_points=10))  # a family without its drift
     assert nc.family(np.float32(31.0), max_amplitude=0.3, max_points=5).sizes["orbit"] > 1
+    for call in (lambda: nc.family(30.5, "disk"), lambda: nc.family(30.5, max_amplitude="1"),
+                 lambda: nc.homoclinic_spin(bracket=(30,)), lambda: nc.homoclinic_spin(bracket=("30", "36")),
+                 lambda: nc.fold_of_cycles(bracket=(30.2, 30.25), xtol=0.0),
+                 lambda: nc.fold_of_cycles(bracket=(30.2, 30.25), xtol=math.nan)):
+        with pytest.raises(ParameterError):
+            call()

@@ -145,11 +145,17 @@ def test_the_pendulum_periods_and_drift_on_a_coarse_grid():
 def test_a_section_the_start_lies_on_or_a_wrong_period_factor_is_refused():
     system = pendulum()
     wrong_direction = Shooting(fixed={"v": 0.0}, vary="x", section=dy.Event("turn", v, "negative"), period_factor=2.0)
-    with pytest.raises(ParameterError, match="half its period"):  # met after a whole period: T counted twice
+    with pytest.raises(ParameterError, match="closes after 1/2"):  # met after a whole period: T counted twice
         symmetric_family(system, wrong_direction, (1.0, None), (0.0, 3.0), amplitudes=[1.0])
     too_large = Shooting(fixed={"v": 0.0}, vary="x", section=dy.Event("turn", v, "any"), period_factor=4.0)
-    with pytest.raises(ParameterError, match="half its period"):
+    with pytest.raises(ParameterError, match="closes after 1/2"):
         symmetric_family(system, too_large, (1.0, None), (0.0, 3.0), amplitudes=[1.0])
+    odd = Shooting(fixed={"v": 0.0}, vary="x", section=dy.Event("turn", v, "any"), period_factor=6.0)
+    with pytest.raises(ParameterError, match="closes after 1/3"):
+        symmetric_family(system, odd, (1.0, None), (0.0, 3.0), amplitudes=[1.0])
+    with pytest.raises(ParameterError, match="amplitude -1 closes after 1/2"):  # every member is checked: the
+        symmetric_family(system, PENDULUM, (1.0, None), (-3.0, 3.0), amplitudes=[1.0, -1.0])  # start x < 0 lies
+        # on the section's plane moving up, so its first crossing comes a whole period later
     too_small = Shooting(fixed={"v": 0.0}, vary="x", section=dy.Event("turn", v, "positive"), period_factor=1.0)
     with pytest.raises(ParameterError, match="does not close"):
         symmetric_family(system, too_small, (1.0, None), (0.0, 3.0), amplitudes=[1.0])
@@ -160,3 +166,14 @@ def test_a_section_the_start_lies_on_or_a_wrong_period_factor_is_refused():
         family_drift(duffing_vdp(), ds, PENDULUM, "p")
     with pytest.raises(ParameterError, match="two different small"):
         family_drift(system, ds, PENDULUM, "p", values=1e-5)
+    with pytest.raises(ParameterError, match="another Shooting"):
+        family_drift(system, ds, Shooting(fixed={"v": 0.1}, vary="x", section=PENDULUM.section, period_factor=2.0),
+                     "p")
+    for bad in (dict(t_max=math.inf), dict(period_factor="2"), dict(section="turn"), dict(fixed=["v"])):
+        with pytest.raises(ParameterError):
+            Shooting(**{"fixed": {"v": 0.0}, "vary": "x", "section": PENDULUM.section, **bad}).check(system)
+    for kwargs in (dict(bounds=(3.0,)), dict(bounds=("0", "3")), dict(amplitudes=["a"]), dict(pars={"q": 0.0}),
+                   dict(direction=0)):
+        call = {"bounds": (0.0, 3.0), "amplitudes": [1.0], **kwargs}
+        with pytest.raises(ParameterError):
+            symmetric_family(system, PENDULUM, (1.0, None), call.pop("bounds"), **call)

@@ -23,6 +23,7 @@ homoclinic orbit (:func:`homoclinic_spin`).
 from __future__ import annotations
 
 import copy
+import json
 import math
 import numbers
 
@@ -32,7 +33,7 @@ import xarray as xr
 from scipy.optimize import brentq
 
 from ..dynamics import Event, Options
-from ..dynamics.symmetric_families import Shooter, Shooting, family_drift, symmetric_family
+from ..dynamics.symmetric_families import Shooter, Shooting, drift_at, family_drift, symmetric_family
 from ..errors import ParameterError
 from ..models import held_spin
 from ..parameters import Setup
@@ -53,7 +54,9 @@ FREE_BOUNDS = (-0.5, 30.0)  # rad/s: beta_dot at the start; the family's lower b
 
 def _pars(spin: float, setup: Setup | None, eps: float = 0.0) -> np.ndarray:
     setup = Setup() if setup is None else setup
-    if not (isinstance(spin, numbers.Real) and math.isfinite(spin) and spin > 0):
+    if not isinstance(setup, Setup):
+        raise ParameterError(f"setup = {setup!r}: give a tippedisk_analysis.Setup (or None for Tables 1-3)")
+    if isinstance(spin, bool) or not (isinstance(spin, numbers.Real) and math.isfinite(spin) and spin > 0):
         raise ParameterError(f"spin = {spin!r}: give the held spin in rad/s, e.g. 30.5")
     pars = inversion.parameters("held", setup, float(spin)).copy()
     pars[held_spin.system().parameter_index("eps")] = eps
@@ -68,8 +71,10 @@ def amplitude_of(ds: xr.Dataset) -> np.ndarray:
 def family(spin: float, setup: Setup | None = None, *, max_amplitude: float = 3.1, max_points: int = 150) -> xr.Dataset:
     """The nutation family of the rolling held model at ``spin`` [rad/s] (disk of ``setup``), from amplitude
     START_AMPLITUDE to ``max_amplitude`` [rad] or until beta_dot at the start leaves FREE_BOUNDS (past a fold)."""
-    if not 0.1 < max_amplitude < math.pi:
+    if not (isinstance(max_amplitude, numbers.Real) and 0.1 < max_amplitude < math.pi):
         raise ParameterError(f"max_amplitude = {max_amplitude!r} rad: give a value between 0.1 and pi")
+    if not (isinstance(max_points, numbers.Integral) and max_points >= 3):
+        raise ParameterError(f"max_points = {max_points!r}: give an integer of at least 3")
     system = held_spin.rolling_system()
     pars = _pars(spin, setup)
     J = system.jacobian(held_spin.spin_state("inverted"), pars)
@@ -87,11 +92,11 @@ def family(spin: float, setup: Setup | None = None, *, max_amplitude: float = 3.
                             direction=-1)
 
 
-def drift(spin: float, setup: Setup | None = None, **kwargs) -> xr.Dataset:
+def drift(spin: float, setup: Setup | None = None, *, max_amplitude: float = 3.1, max_points: int = 150) -> xr.Dataset:
     """:func:`family` with each orbit's Melnikov drift under friction (:func:`.family_drift`, per unit eps) and
     ``amplitude_rate`` = d a / d(eps t) [rad/m], the nutation amplitude's rate in the slow time (negative: the
     nutation decays; the generic ``drift_rate`` is that of gamma at the start, the opposite sign)."""
-    ds = family(spin, setup, **kwargs)
+    ds = family(spin, setup, max_amplitude=max_amplitude, max_points=max_points)
     out = family_drift(held_spin.system(), ds, SHOOTING, "eps", EPS_PROBES, unperturbed=held_spin.rolling_system())
     out["amplitude_rate"] = ("orbit", -out.drift_rate.values, {"units": "rad m-1", "long_name": "d a / d(eps t): "
                              "the nutation amplitude's rate in the slow time (negative: the nutation decays)"})
@@ -105,35 +110,78 @@ def _check_drift(ds) -> None:
                              "drift)")
 
 
-def cycles(ds: xr.Dataset) -> dict:
+def _member(ds: xr.Dataset, a: float, free_guess: float) -> tuple[float, float]:
+    """(d a / d(eps t) [rad/m], period [s]) of the member with amplitude ``a`` of the family in ``ds`` (its stored
+    parameters); the rate NaN where its drift fails its checks."""
+    pars = json.loads(ds.attrs["config"])["pars"]
+    found = drift_at(held_spin.system(), SHOOTING, 0.5 * math.pi - a, free_guess, pars, "eps", EPS_PROBES,
+                     unperturbed=held_spin.rolling_system())
+    return (-found["drift"] / found["period"] if found["valid"] else math.nan), found["period"]
+
+
+def _spin_grows(ds: xr.Dataset) -> bool:
+    """Whether the smallest nutations grow: the sign of the inverted spin's nutation pair at eps -> 0."""
+    pars = dict(json.loads(ds.attrs["config"])["pars"], eps=1e-6)
+    held = held_spin.system()
+    w = np.linalg.eigvals(held.jacobian(held_spin.spin_state("inverted"), held.with_pars(None, **pars)))
+    upper = w[w.imag > 1e-9]
+    return bool(upper[np.argmin(upper.imag)].real > 0)
+
+
+def cycles(ds: xr.Dataset, refine: bool = True) -> dict:
     """The nutation cycles that survive friction in a :func:`drift` dataset: the amplitudes [rad] where
-    d a / d(eps t) changes sign on the family's first branch (up to its first fold), interpolated between
-    checked orbits; {"cycles": [{"amplitude", "period" [s], "kind"}], "status"}. ``kind`` is ``repelling`` (the
-    nutation decays inside it and grows outside, in the averaged amplitude) or ``attracting``. Status
-    ``completed`` (at least one), ``none_decays`` (the nutation grows at every amplitude), ``all_decay`` (it
-    decays at every amplitude up to the fold) or ``unchecked`` (a sign change next to an orbit whose drift is not
-    checked)."""
+    d a / d(eps t) changes sign on the family's first branch (up to its first fold), located by Brent's method on
+    re-shot members (``refine``; else interpolated between members); {"cycles": [{"amplitude", "period" [s],
+    "kind"}], "status"}. ``kind`` is ``repelling`` (the nutation decays inside it and grows outside, in the
+    amplitude averaged over the phase) or ``attracting``. A cycle below the family's first checked member is
+    found from the sign of the smallest nutations (the spin's own eigenvalues). Status ``completed`` (at least
+    one), ``none_decays`` (the nutation grows at every amplitude), ``all_decay`` (it decays at every amplitude up
+    to the fold) or ``unchecked`` (a sign change next to an orbit whose drift is not checked)."""
     _check_drift(ds)
     a, rate = amplitude_of(ds), ds.amplitude_rate.values
+    free = ds.start.sel(state=SHOOTING.free).values
     valid = ds.drift_valid.values.astype(bool)
     first = np.flatnonzero(ds.fold.values)
     end = int(first[0]) if first.size else len(a)
     idx = [k for k in range(end) if valid[k]]
     if not idx:
         return {"cycles": [], "status": "unchecked"}
-    signs = np.sign(rate[idx])
-    found = []
-    for c in np.flatnonzero(signs[1:] != signs[:-1]):
+    brackets = []  # (low amplitude, its rate, free there, member index above)
+    if (rate[idx[0]] < 0) == _spin_grows(ds):  # the smallest nutations do the opposite of the first member
+        brackets.append((0.0, -rate[idx[0]], 0.0, idx[0]))
+    for c in np.flatnonzero(np.sign(rate[idx][1:]) != np.sign(rate[idx][:-1])):
         i, j = idx[c], idx[c + 1]
         if j != i + 1:
             return {"cycles": [], "status": "unchecked"}
-        w = rate[i] / (rate[i] - rate[j])
-        found.append({"amplitude": float(a[i] + w * (a[j] - a[i])),
-                      "period": float(ds.period.values[i] + w * (ds.period.values[j] - ds.period.values[i])),
-                      "kind": "repelling" if rate[j] > rate[i] else "attracting"})
+        brackets.append((a[i], rate[i], free[i], j))
+    found = []
+    for a_low, rate_low, free_low, j in brackets:
+        def rate_at(x, a_low=a_low, free_low=free_low, j=j):
+            return _member(ds, x, free_low + (x - a_low) / (a[j] - a_low) * (free[j] - free_low))
+
+        amplitude = a_low + rate_low / (rate_low - rate[j]) * (a[j] - a_low)  # interpolated, unless refined
+        if refine:
+            low = a_low
+            for _ in range(6 if a_low == 0.0 else 0):  # an amplitude below the cycle, with the smallest's sign
+                low = (low or a[j]) * 0.25
+                if np.sign(rate_at(low)[0]) == np.sign(rate_low):
+                    break
+            if low > 0 and np.sign(rate_at(low)[0]) == np.sign(rate_low):
+                def finite_rate(x):
+                    value = rate_at(x)[0]
+                    if not math.isfinite(value):
+                        raise ValueError("a member's drift failed its checks")
+                    return value
+
+                try:
+                    amplitude = brentq(finite_rate, low, a[j], xtol=1e-7)
+                except ValueError:
+                    pass  # keep the interpolated amplitude
+        found.append({"amplitude": float(amplitude), "period": float(rate_at(amplitude)[1]),
+                      "kind": "repelling" if rate_low < 0 else "attracting"})
     if found:
         return {"cycles": found, "status": "completed"}
-    return {"cycles": [], "status": "all_decay" if signs[0] < 0 else "none_decays"}
+    return {"cycles": [], "status": "all_decay" if rate[idx[0]] < 0 else "none_decays"}
 
 
 def repelling_cycle(ds: xr.Dataset) -> dict:
@@ -145,16 +193,29 @@ def repelling_cycle(ds: xr.Dataset) -> dict:
                                             "no_repelling_cycle"}
 
 
+def _spins(bracket) -> tuple[float, float]:
+    """A bracket of held spins (low, high), 0 < low < high [rad/s], or a one-line ParameterError."""
+    ok = (not isinstance(bracket, str) and hasattr(bracket, "__len__") and len(bracket) == 2
+          and all(isinstance(x, numbers.Real) and math.isfinite(x) for x in bracket) and 0 < bracket[0] < bracket[1])
+    if not ok:
+        raise ParameterError(f"bracket = {bracket!r}: give held spins (low, high) with 0 < low < high [rad/s]")
+    return float(bracket[0]), float(bracket[1])
+
+
 def fold_of_cycles(setup: Setup | None = None, bracket: tuple | None = None, xtol: float = 1e-4) -> dict:
     """The held spin [rad/s] below omega_c at which the attracting and the repelling nutation cycle meet (a fold
     of cycles): bisection of whether d a / d(eps t) < 0 anywhere on the family's first branch below amplitude
     0.6 rad (``bracket`` default: omega_c - 0.05 to omega_c). {"spin", "low", "high", "status"}: ``completed``,
     ``no_fold`` (cycles at both ends or at neither: the bracket holds no fold)."""
     setup = Setup() if setup is None else setup
+    if not isinstance(setup, Setup):
+        raise ParameterError(f"setup = {setup!r}: give a tippedisk_analysis.Setup (or None for Tables 1-3)")
     if bracket is None:
         omega_c = critical_spin.omega_critical(setup.disk, setup.gravity).omega_critical
         bracket = (omega_c - 0.05, omega_c)
-    low, high = map(float, bracket)
+    low, high = _spins(bracket)
+    if not (isinstance(xtol, numbers.Real) and 0 < xtol < high - low):
+        raise ParameterError(f"xtol = {xtol!r}: give a positive tolerance [rad/s] smaller than the bracket")
 
     def has_cycles(spin):
         ds = drift(spin, setup, max_amplitude=0.6, max_points=40)
@@ -194,9 +255,7 @@ def homoclinic_spin(setup: Setup | None = None, bracket: tuple = (30.0, 36.0)) -
     for as long again, comes back to within RETURN_TOL of the lower spin. {"spin", "tilt_at_top" (beta - pi/2,
     rad), "return_distance", "status"}: ``completed``, ``no_crossing`` (beta_dot keeps its sign at the ends of
     the bracket) or ``not_verified`` (the return check failed)."""
-    low, high = bracket
-    if not (0 < low < high and math.isfinite(high)):
-        raise ParameterError(f"bracket = {bracket!r}: give held spins 0 < low < high [rad/s]")
+    low, high = _spins(bracket)
 
     def beta_dot(spin):
         hit = _top_of_unstable_manifold(spin, setup)

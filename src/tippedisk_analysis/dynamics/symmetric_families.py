@@ -7,20 +7,24 @@ family member is found by shooting: the start lies on the first plane (``fixed``
 coordinate ``vary`` is the family's amplitude, another ``free`` is solved for so that the state ``condition``
 vanishes where the orbit first crosses ``section`` (the second plane). The family is continued in (free, vary)
 by the generic pseudo-arclength core (:mod:`.continuation`), which locates its folds (the largest amplitude a
-family reaches). Without a ``free`` coordinate (a planar system) every amplitude is an orbit.
+family reaches). Without a ``free`` coordinate (a planar system) every amplitude is an orbit. Every member must
+close after its period and not after a fraction 1/k of it (k = 2 ... MAX_MULTIPLE): a section met at a multiple
+of the period, or a wrong ``period_factor``, is refused.
 
-**The drift** (:func:`family_drift`). For p != 0 the family breaks up, and a start on it moves across it by
-O(p) per revolution: the Melnikov function of the family. With P the return map to the section and
-DP0 its derivative on the family at p = 0 (DP0 t = t along the family tangent t, DP0 f = 0 along the flow),
-the left eigenvector l of DP0 for the eigenvalue 1 takes out every other direction, so
+**The drift** (:func:`family_drift`, :func:`drift_at`). For p != 0 the family breaks up, and a start on it
+moves across it by O(p) per revolution: the Melnikov function of the family. With P the period map to the
+section and DP0 its derivative on the family at p = 0 (DP0 t = t along the family tangent t, DP0 f = 0 along the
+flow), the left eigenvector l of DP0 for the eigenvalue 1 takes out every other direction, so
 
     da per revolution = p l . dP/dp / (l . dx/da) + O(p^2),
 
-a = the amplitude. Where it changes sign along the family a periodic orbit of the perturbed system survives
-(a zero of the Melnikov function); its sign says on which side starts drift. The derivative dP/dp is measured
-at two small values of p and must agree (``drift_check``); where another eigenvalue of DP0 comes near 1 (a
-resonance of the transverse oscillation with the family, or a fold) l is not defined and the orbit is flagged
-(``drift_valid`` = 0, ``resonance_gap``).
+a = the amplitude. dP/dp is measured at two small values of p, and the reported drift is their linear
+extrapolation to p = 0; the two must agree (``drift_check``). dx/da comes from members re-shot at a +- 1e-6.
+Where the drift changes sign along the family a periodic orbit of the perturbed system survives (a zero of the
+Melnikov function); its sign says on which side starts drift. Where another eigenvalue of DP0 comes near 1 (a
+resonance of the transverse oscillation with the family, a fold) l is not defined, and where one passes 1
+between two members the family branches (the drift may have a pole there): such orbits are flagged
+(``drift_valid`` = 0, with ``resonance_gap`` and ``branch_point``).
 """
 
 from __future__ import annotations
@@ -28,6 +32,7 @@ from __future__ import annotations
 import copy
 import json
 import math
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
@@ -41,24 +46,38 @@ from .continuation_interface import Options, Problem
 from .datasets import flag_attrs, mixed_units, state_coordinates
 from .system import Event, System
 
-__all__ = ["Shooting", "Shooter", "symmetric_family", "family_drift"]
+__all__ = ["Shooting", "Shooter", "symmetric_family", "family_drift", "drift_at"]
 
 TOL = 1e-13  # Taylor tolerance of the shooting runs
 FD_STEP = 1e-7  # relative finite-difference step of the shooting Jacobian and of DP0
+TANGENT_STEP = 1e-6  # relative amplitude step of the re-shot members that give the family's tangent
 RESONANCE_GAP = 0.05  # an eigenvalue of DP0 closer than this to 1 leaves the drift undefined
-DRIFT_AGREEMENT = 1e-2  # the drift per unit parameter at the two parameter values must agree to this (relative)
-SKIP = 0.25  # fraction of the period run before the return map looks for the section
+DRIFT_AGREEMENT = 1e-2  # the drift at the two parameter values must agree to this (relative)
 MIN_TIME = 1e-9  # a section crossing this soon after the start is the start itself (heyoka sees a zero at t = 0)
 CLOSURE_TOL = 1e-6  # a member must return to its start after its period to this (state scale, relative)
-ONE_TOL = 1e-3  # the return map's eigenvalue for the family tangent must lie this close to 1
+MAX_MULTIPLE = 7  # a member must not close after period / k, k = 2 ... MAX_MULTIPLE
+ONE_TOL = 1e-3  # the period map's eigenvalue for the family tangent must lie this close to 1
+
+
+def _real(value, what: str) -> float:
+    """``value`` as a finite float, or a one-line ParameterError naming ``what``."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
+        raise ParameterError(f"{what} = {value!r}: give a finite number")
+    return float(value)
+
+
+def _pair(value, what: str) -> tuple[float, float]:
+    if isinstance(value, str) or not hasattr(value, "__len__") or len(value) != 2:
+        raise ParameterError(f"{what} = {value!r}: give two numbers")
+    return _real(value[0], what), _real(value[1], what)
 
 
 @dataclass(frozen=True)
 class Shooting:
     """How a family member is shot: from ``fixed`` (state name: value) with ``vary`` = the amplitude and ``free``
-    solved for (None: planar, nothing to solve), to the first crossing of ``section`` (an :class:`Event`), where
-    the state ``condition`` must vanish; the period is ``period_factor`` times the time to the section (4 for
-    an orbit through the fixed planes of two reversors, 2 for one)."""
+    solved for (None: planar, nothing to solve), to the first crossing of ``section`` (an :class:`Event`) after
+    the start, where the state ``condition`` must vanish; the period is ``period_factor`` times the time to the
+    section (4 for an orbit through the fixed planes of two reversors, 2 for one)."""
 
     fixed: dict
     vary: str
@@ -69,6 +88,10 @@ class Shooting:
     t_max: float = 1e3
 
     def check(self, system: System) -> None:
+        if not isinstance(self.fixed, dict) or not isinstance(self.section, Event):
+            raise ParameterError("give fixed as {state: value} and section as a dynamics.Event")
+        for name, value in self.fixed.items():
+            _real(value, f"fixed[{name!r}]")
         names = [*self.fixed, self.vary, *([self.free, self.condition] if self.free else [])]
         unknown = [n for n in names if n not in system.state_names]
         if unknown:
@@ -80,12 +103,17 @@ class Shooting:
                                  "amplitude (vary) and the free one")
         if bool(self.free) != bool(self.condition):
             raise ParameterError("give both free and condition (one unknown, one equation), or neither")
-        if not (self.period_factor > 0 and self.t_max > 0):
+        if not (_real(self.period_factor, "period_factor") > 0 and _real(self.t_max, "t_max") > 0):
             raise ParameterError("period_factor and t_max must be positive")
+
+    def config(self) -> dict:
+        return {"fixed": self.fixed, "vary": self.vary, "free": self.free, "condition": self.condition,
+                "section": self.section.name, "section_direction": self.section.direction,
+                "period_factor": self.period_factor}
 
 
 class Shooter:
-    """Runs to the section (and round again, for the return map) with the System's compiled integrators."""
+    """Runs to the section (and round the period, for the period map) with the System's compiled integrators."""
 
     def __init__(self, system: System, shooting: Shooting, tol: float = TOL):
         shooting.check(system)
@@ -105,8 +133,8 @@ class Shooter:
         return x
 
     def run(self, x0: np.ndarray, pars: np.ndarray, skip: float = 0.0) -> tuple[np.ndarray, float] | None:
-        """(state, time) at the first crossing of the section after ``skip`` [time units]; None if the run
-        ended otherwise (no crossing within t_max, non-finite)."""
+        """(state, time) at the first crossing of the section after ``skip`` [time units] (a crossing at the
+        start itself does not count); None if the run ended otherwise (no crossing within t_max, non-finite)."""
         t0 = 0.0
         if skip > 0:
             ta = copy.deepcopy(self.plain)
@@ -131,6 +159,20 @@ class Shooter:
         scale = np.asarray(self.system.state_scale) + np.abs(x0)
         return float(np.max(np.abs(ta.state - x0) / scale)) if np.all(np.isfinite(ta.state)) else math.inf
 
+    def least_period_error(self, x0: np.ndarray, period: float, pars: np.ndarray) -> str:
+        """'' if the orbit closes after ``period`` and after no period / k (k = 2 ... MAX_MULTIPLE); else why not."""
+        error = self.closure(x0, period, pars)
+        if not error <= CLOSURE_TOL:
+            return (f"does not close after period_factor x the time to the section (error {error:.2g}): the "
+                    "section is not where the orbit meets the second fixed plane, or period_factor is wrong (4 for "
+                    "two reversors' planes, 2 for one)")
+        for k in range(2, MAX_MULTIPLE + 1):
+            if self.closure(x0, period / k, pars) <= CLOSURE_TOL:
+                return (f"closes after 1/{k} of its period already: the section {self.shooting.section.name!r} is met "
+                        f"at a multiple of the period (its direction), or period_factor = "
+                        f"{self.shooting.period_factor:g} is {k} times too large")
+        return ""
+
     def solve_free(self, amplitude: float, guess: float, pars: np.ndarray) -> float:
         """The free start coordinate of the member with ``amplitude``, by secant steps from ``guess`` (NaN if
         they fail)."""
@@ -149,7 +191,7 @@ class Shooter:
     def tangent(self, amplitude: float, free: float | None, pars: np.ndarray) -> np.ndarray | None:
         """d(crossing state)/d(amplitude) along the family, by central differences of re-shot members (the free
         coordinate solved again at each); None where a neighbour cannot be shot."""
-        h = 1e-6 * max(1.0, abs(amplitude))
+        h = TANGENT_STEP * max(1.0, abs(amplitude))
         ends = []
         for a in (amplitude - h, amplitude + h):
             b = None if free is None else self.solve_free(a, free, pars)
@@ -199,34 +241,45 @@ def symmetric_family(system: System, shooting: Shooting, start: tuple, bounds: t
     (amplitude, a guess of free) (e.g. from the linearisation; free ignored for a planar shooting), continued in
     the amplitude within ``bounds`` (and the free coordinate within ``free_bounds``), in ``direction`` (+1: the
     amplitude coordinate grows first; planar: the orbits at ``amplitudes``). ``scale``: typical sizes of (free,
-    amplitude), the arclength metric. Dataset kind ``symmetric_family``
-    along ``orbit``: the start state, the state at the section, the period, the amplitude, and the fold points
-    of the amplitude (``fold`` = 1); status ``completed`` (a bound reached), or the core's ``max_points``,
-    ``stalled``, ``corrector_failed`` with its message."""
-    pars = system.with_pars(pars)
+    amplitude), the arclength metric. Dataset kind ``symmetric_family`` along ``orbit``: the start state, the
+    state at the section, the period, the amplitude, the fold points of the amplitude (``fold`` = 1) and
+    ``closure_error``; status ``completed`` (a bound reached), or the core's ``max_points``, ``stalled``,
+    ``corrector_failed`` with its message."""
     shooter = Shooter(system, shooting)
-    low, high = bounds
-    if not (math.isfinite(low) and math.isfinite(high) and low < high):
-        raise ParameterError(f"bounds = {bounds!r}: give finite (low, high) amplitudes with low < high")
+    try:
+        pars = system.with_pars(None, **pars) if isinstance(pars, dict) else system.with_pars(pars)
+    except (TypeError, ValueError):
+        raise ParameterError(f"pars = {pars!r}: give the values of {', '.join(system.parameter_names)} (a vector "
+                             "or {name: value})") from None
+    low, high = _pair(bounds, "bounds")
+    if not low < high:
+        raise ParameterError(f"bounds = {bounds!r}: give (low, high) amplitudes with low < high")
+    if options is not None and not isinstance(options, Options):
+        raise ParameterError("options: give a dynamics.Options")
+    if direction not in (1, -1):
+        raise ParameterError(f"direction = {direction!r}: give +1 or -1")
     if shooting.free is None:
-        values = np.asarray(amplitudes if amplitudes is not None else [], dtype=float)
-        if values.ndim != 1 or values.size == 0:
-            raise ParameterError("a planar shooting (no free state) needs the amplitudes of its orbits")
+        try:
+            values = np.asarray(amplitudes if amplitudes is not None else [], dtype=float)
+        except (TypeError, ValueError):
+            raise ParameterError(f"amplitudes = {amplitudes!r}: give numbers") from None
+        if values.ndim != 1 or values.size == 0 or not np.all(np.isfinite(values)):
+            raise ParameterError("a planar shooting (no free state) needs the amplitudes of its orbits (numbers)")
         if not np.all((values >= low) & (values <= high)):
             raise ParameterError(f"amplitudes {values.min():.6g}-{values.max():.6g} leave the bounds {bounds}; give "
                                  "amplitudes inside them")
         rows = [(a, None, shooter.run(shooter.start(a, None), pars)) for a in values]
         folds, status, message = set(), "completed", f"{len(rows)} orbits"
     else:
-        problem = _FamilyProblem(shooter, pars, bounds, scale, free_bounds)
-        if len(start) != 2 or not all(isinstance(v, int | float) and math.isfinite(v) for v in start):
-            raise ParameterError(f"start = {start!r}: give (amplitude, a guess of {shooting.free}) as two numbers")
-        free = shooter.solve_free(float(start[0]), float(start[1]), pars)  # solved at the start's amplitude
+        first, guess = _pair(start, "start (amplitude, a guess of the free state)")
+        if not low <= first <= high:
+            raise ParameterError(f"the start's amplitude {first:g} lies outside the bounds {bounds}")
+        problem = _FamilyProblem(shooter, pars, (low, high), scale, free_bounds)
+        free = shooter.solve_free(first, guess, pars)  # solved at the start's amplitude
         if not math.isfinite(free):
-            raise ParameterError(f"no orbit of the family starts at {shooting.vary} = {start[0]:.6g} near "
-                                 f"{shooting.free} = {start[1]:.6g}; give a better guess (e.g. from the linearisation)")
-        branch = continue_branch(problem, np.array([free, start[0]], dtype=float), options or Options(ds=0.05),
-                                 direction=direction)
+            raise ParameterError(f"no orbit of the family starts at {shooting.vary} = {first:.6g} near "
+                                 f"{shooting.free} = {guess:.6g}; give a better guess (e.g. from the linearisation)")
+        branch = continue_branch(problem, np.array([free, first]), options or Options(ds=0.05), direction=direction)
         folds = {sp.index for sp in branch.special_points if sp.kind == "fold"}
         rows = [(p.u[1], p.u[0], shooter.run(shooter.start(p.u[1], p.u[0]), pars)) for p in branch.points]
         status, message = branch.status, branch.message
@@ -238,18 +291,11 @@ def symmetric_family(system: System, shooting: Shooting, start: tuple, bounds: t
     starts = np.array([shooter.start(a, b) for a, b, _hit in rows])
     crossings = np.array([hit[0] for _a, _b, hit in rows])
     periods = np.array([shooting.period_factor * hit[1] for _a, _b, hit in rows])
+    for k, (x, T) in enumerate(zip(starts, periods)):
+        why = shooter.least_period_error(x, T, pars)
+        if why:
+            raise ParameterError(f"the orbit with amplitude {rows[k][0]:.6g} {why}")
     closure = np.array([shooter.closure(x, T, pars) for x, T in zip(starts, periods)])
-    half = shooter.closure(starts[0], 0.5 * periods[0], pars)
-    if half <= CLOSURE_TOL:
-        raise ParameterError(f"the orbit with amplitude {rows[0][0]:.6g} closes after half its period already: "
-                             f"the section {shooting.section.name!r} is met at a multiple of the period (its "
-                             f"direction) or period_factor = {shooting.period_factor:g} is too large")
-    if not np.all(closure <= CLOSURE_TOL):
-        k = int(np.argmax(closure))
-        raise ParameterError(f"the orbit with amplitude {rows[k][0]:.6g} does not close after period_factor x the time "
-                             f"to the section (error {closure[k]:.2g}): the section is not where the orbit meets the "
-                             "second fixed plane, or period_factor is wrong (4 for two reversors' planes, 2 for one; "
-                             "the section's direction must skip the start)")
     fold = np.array([k in folds for k in range(len(rows))], dtype=np.int8)
     units = system.units_of(shooting.vary)
     coords = {"orbit": index_coordinate("orbit", len(rows), "family member"), **state_coordinates(system)}
@@ -262,11 +308,177 @@ def symmetric_family(system: System, shooting: Shooting, start: tuple, bounds: t
         "fold": ("orbit", fold, flag_attrs("fold of the amplitude along the family", {"no": 0, "yes": 1})),
         "closure_error": ("orbit", closure, {"units": "1", "long_name": "max |x(period) - x(0)| / (scale + |x(0)|)"}),
     }, coords=coords)
-    config = {"fixed": shooting.fixed, "vary": shooting.vary, "free": shooting.free, "condition": shooting.condition,
-              "section": shooting.section.name, "period_factor": shooting.period_factor, "bounds": list(bounds),
-              "pars": dict(zip(system.parameter_names, map(float, pars)))}
+    config = {**shooting.config(), "bounds": [low, high], "pars": dict(zip(system.parameter_names, map(float, pars)))}
     ds.attrs = make_attrs("symmetric_family", config, status, message, system=system.name)
     return ds
+
+
+def _orbit_drift(shooters: tuple, x0: np.ndarray, period: float, amplitude: float, free, pars: np.ndarray,
+                 index: int, values: tuple) -> dict:
+    """One orbit's drift (at p -> 0, extrapolated from ``values``), the two measured values, the resonance gap,
+    the product of (mu - 1) over the transverse multipliers (its sign change between members marks a branch
+    point) and whether the period map has an eigenvalue 1 (``one``)."""
+    shooter, base_shooter = shooters
+    n = len(x0)
+    out = {"drift": math.nan, "measured": (math.nan, math.nan), "gap": 0.0, "transverse": 0.0, "one": True}
+    skip = period * (1.0 - 0.5 / shooter.shooting.period_factor)  # the next crossing is the one a period on
+    base = base_shooter.run(x0, pars, skip)
+    tangent = base_shooter.tangent(amplitude, free, pars)
+    if base is None or tangent is None:
+        return out
+    D = np.zeros((n, n))
+    for j in range(n):
+        h = FD_STEP * max(1.0, abs(x0[j]))
+        hit = base_shooter.run(x0 + h * np.eye(n)[j], pars, skip)
+        if hit is None:
+            return out
+        D[:, j] = (hit[0] - base[0]) / h
+    w, left = np.linalg.eig(D.T)
+    one = int(np.argmin(np.abs(w - 1.0)))
+    if abs(w[one] - 1.0) > ONE_TOL:  # two multipliers near 1 split (a fold or a resonance): no l
+        return {**out, "one": False}
+    flow = int(np.argmin(np.abs(np.where(np.arange(n) == one, np.inf, w))))  # the flow's eigenvalue 0
+    others = np.delete(w, [one, flow])
+    out["gap"] = float(np.min(np.abs(others - 1.0))) if others.size else math.inf
+    out["transverse"] = float(np.prod(others - 1.0).real) if others.size else 1.0
+    ell = left[:, one].real
+    measured = []
+    for value in values:
+        perturbed = pars.copy()
+        perturbed[index] = value
+        hit = shooter.run(x0, perturbed, skip)
+        measured.append(math.nan if hit is None else float(ell @ (hit[0] - base[0]) / value / (ell @ tangent)))
+    (v1, v2), (d1, d2) = values, measured
+    out["measured"] = (d1, d2)
+    out["drift"] = (v2 * d1 - v1 * d2) / (v2 - v1)  # linear in p: the value at p = 0
+    return out
+
+
+def _drift_setup(system, shooting, pars_by_name, parameter, values, unperturbed):
+    try:
+        values = tuple(_real(v, "values") for v in values)
+    except TypeError:
+        raise ParameterError(f"values = {values!r}: give two different small nonzero values of {parameter}") from None
+    if len(values) != 2 or 0.0 in values or values[0] == values[1]:
+        raise ParameterError(f"values = {values!r}: give two different small nonzero values of {parameter}")
+    base_system = system if unperturbed is None else unperturbed
+    for candidate in (system, base_system):
+        if sorted(candidate.parameter_names) != sorted(pars_by_name):
+            raise ParameterError(f"{candidate.name!r} has other parameters than the family; give the system it was "
+                                 "computed on")
+    pars = system.with_pars([pars_by_name[n] for n in system.parameter_names])
+    index = system.parameter_index(parameter)
+    if pars[index] != 0.0:
+        raise ParameterError(f"the family was computed at {parameter} = {pars[index]:g}; compute it at 0")
+    return (Shooter(system, shooting), Shooter(base_system, shooting)), pars, index, values
+
+
+def drift_at(system: System, shooting: Shooting, amplitude: float, free_guess, pars, parameter: str,
+             values: tuple = (1e-5, 2e-5), unperturbed: System | None = None) -> dict:
+    """The drift (per revolution per unit ``parameter``, extrapolated to 0) of the member of the family with
+    ``amplitude`` (free coordinate solved from ``free_guess``) at ``pars`` (``parameter`` 0): {"drift",
+    "period", "check", "valid"} (valid: an eigenvalue 1, no resonance, the two values agree); a zero of it
+    between two members is a cycle located exactly (see :func:`family_drift` for the rest)."""
+    try:
+        vector = system.with_pars(None, **pars) if isinstance(pars, dict) else system.with_pars(pars)
+    except (TypeError, ValueError):
+        raise ParameterError(f"pars: give the values of {', '.join(system.parameter_names)}") from None
+    pars = dict(zip(system.parameter_names, map(float, vector)))
+    shooters, pars, index, values = _drift_setup(system, shooting, pars, parameter, values, unperturbed)
+    base = shooters[1]
+    amplitude = _real(amplitude, "amplitude")
+    free = None if shooting.free is None else base.solve_free(amplitude, _real(free_guess, "free_guess"), pars)
+    if free is not None and not math.isfinite(free):
+        raise ParameterError(f"no member of the family at {shooting.vary} = {amplitude:.6g}")
+    hit = base.run(base.start(amplitude, free), pars)
+    if hit is None:
+        raise ParameterError(f"the member at {shooting.vary} = {amplitude:.6g} does not reach the section")
+    period = shooting.period_factor * hit[1]
+    found = _orbit_drift(shooters, hit[0], period, amplitude, free, pars, index, values)
+    d1, d2 = found["measured"]
+    check = abs(d1 - d2) / max(abs(d2), 1e-300)
+    valid = found["one"] and math.isfinite(found["drift"]) and found["gap"] > RESONANCE_GAP
+    return {"drift": found["drift"], "period": period, "check": check, "valid": bool(valid)}
+
+
+def family_drift(system: System, family: xr.Dataset, shooting: Shooting, parameter: str,
+                 values: tuple = (1e-5, 2e-5), unperturbed: System | None = None) -> xr.Dataset:
+    """The Melnikov drift of every orbit of ``family`` (from :func:`symmetric_family` with the same ``shooting``,
+    at the parameters stored in it, where ``parameter`` is 0) measured at the small ``values`` and extrapolated
+    to 0: ``drift`` [amplitude units per revolution per unit parameter], ``drift_rate`` (the same per unit
+    time), ``drift_check`` (difference of the two measured values, relative to the larger of the drift and the
+    family's median drift), ``resonance_gap`` (distance of the period map's nearest other eigenvalue from 1),
+    ``branch_point`` (1 where another multiplier passes 1 between the orbit and the next: the family branches)
+    and ``drift_valid`` (1 where the period map has an eigenvalue within ONE_TOL of 1, the gap exceeds
+    RESONANCE_GAP, the two values agree to DRIFT_AGREEMENT, and the orbit is at no fold and next to no branch
+    point). The family's end members are not evaluated.
+    ``unperturbed``: the same system written with ``parameter`` = 0 in its expressions, where the family was
+    computed on it (heyoka's Taylor coefficients of 0 * g overflow where g is singular, and 0 * inf is no 0);
+    it runs the period map at 0, ``system`` at the small values."""
+    if not isinstance(family, xr.Dataset) or family.attrs.get("kind") != "symmetric_family" or "period" not in family:
+        raise ParameterError("family: give a dataset of dynamics.symmetric_families.symmetric_family")
+    try:
+        config = json.loads(family.attrs["config"])
+        stored_pars = config["pars"]
+    except (KeyError, TypeError, ValueError):
+        raise ParameterError("the family has no readable config; compute it again with symmetric_family") from None
+    if any(config.get(key) != value for key, value in shooting.config().items()):
+        raise ParameterError("the family was shot with another Shooting; give the one it was computed with")
+    if family.attrs.get("system") not in (system.name, getattr(unperturbed, "name", None)):
+        raise ParameterError(f"the family was computed on {family.attrs.get('system')!r}; give that system")
+    shooters, pars, index, values = _drift_setup(system, shooting, stored_pars, parameter, values, unperturbed)
+    crossings, periods, amplitude = family.crossing.values, family.period.values, family.amplitude.values
+    free = family.start.sel(state=shooting.free).values if shooting.free else [None] * len(amplitude)
+    size = len(amplitude)
+    if size < 3:
+        raise ParameterError(f"the family has {size} orbits; the drift needs neighbours on both sides (at least 3)")
+    drift, measured = np.full(size, np.nan), np.full((size, 2), np.nan)
+    gap, transverse, no_one = np.zeros(size), np.zeros(size), np.zeros(size, bool)
+    for k in range(1, size - 1):
+        found = _orbit_drift(shooters, crossings[k], periods[k], amplitude[k], free[k], pars, index, values)
+        drift[k], measured[k], gap[k], transverse[k] = found["drift"], found["measured"], found["gap"], found[
+            "transverse"]
+        no_one[k] = not found["one"]
+    finite = np.isfinite(drift) & np.all(np.isfinite(measured), axis=1)
+    typical = float(np.median(np.abs(drift[finite]))) if finite.any() else 0.0
+    check = np.where(finite, np.abs(measured[:, 0] - measured[:, 1])
+                     / np.maximum(np.abs(drift), max(typical, 1e-300)), 0.0)
+    branch = np.zeros(size, np.int8)
+    crossed = transverse[1:-2] * transverse[2:-1] < 0  # another multiplier passes 1 between k and k + 1
+    branch[1:-2] |= crossed
+    branch[2:-1] |= crossed
+    fold = family.fold.values
+    near_fold = np.array([fold[max(k - 1, 0): k + 2].any() for k in range(size)])
+    valid = (finite & (check <= DRIFT_AGREEMENT) & (gap > RESONANCE_GAP) & ~near_fold & (branch == 0)).astype(np.int8)
+    drift[~finite] = 0.0
+    units = _units_product(system.units_of(shooting.vary), system.units_of(parameter), -1)
+    out = family.copy()
+    out["drift"] = ("orbit", drift, {"units": units, "long_name": f"change of the amplitude per revolution per unit "
+                                     f"{parameter} (Melnikov), extrapolated to {parameter} = 0"})
+    out["drift_rate"] = ("orbit", drift / periods, {"units": _units_product(units, system.time_units, -1),
+                                                    "long_name": f"drift per unit time per unit {parameter}"})
+    out["drift_check"] = ("orbit", check, {"units": "1", "long_name": f"difference of the drift measured at "
+                                           f"{parameter} = {values[0]:g} and {values[1]:g}, relative"})
+    out["resonance_gap"] = ("orbit", gap, {"units": "1", "long_name": "distance from 1 of the period map's nearest "
+                                           "other eigenvalue"})
+    out["branch_point"] = ("orbit", branch, flag_attrs("another multiplier passes 1 next to this orbit",
+                                                       {"no": 0, "yes": 1}))
+    out["drift_valid"] = ("orbit", valid, flag_attrs("whether the drift is defined and checked (0: an end "
+                                                     "member, a fold, a branch point, a resonance or a failed "
+                                                     "check)", {"no": 0, "yes": 1}))
+    inner = slice(1, -1)
+    reasons = {"no eigenvalue 1 of the period map": int(no_one.sum()),
+               "not finite": int((~finite & ~no_one)[inner].sum()),
+               "nonlinear in " + parameter: int((finite & (check > DRIFT_AGREEMENT))[inner].sum()),
+               "resonance": int((finite & (gap <= RESONANCE_GAP))[inner].sum()),
+               "next to a fold": int(near_fold[inner].sum()), "next to a branch point": int(branch[inner].sum())}
+    failed = ", ".join(f"{count} {why}" for why, count in reasons.items() if count)
+    n_valid = int(valid.sum())
+    message = f"drift of {n_valid} of {size - 2} inner orbits checked" + (f" (not: {failed})" if failed else "")
+    cfg = {**config, "parameter": parameter, "values": list(values)}
+    out.attrs = make_attrs("symmetric_family", cfg, "completed" if n_valid else "degenerate", message,
+                           system=family.attrs.get("system"))
+    return out
 
 
 def _units_product(units: str, other: str, power: int) -> str:
@@ -280,118 +492,3 @@ def _units_product(units: str, other: str, power: int) -> str:
             symbol = factor.rstrip("-0123456789")
             exponents[symbol] = exponents.get(symbol, 0) + sign * int(factor[len(symbol):] or 1)
     return " ".join(s if e == 1 else f"{s}{e}" for s, e in exponents.items() if e) or "1"
-
-
-def family_drift(system: System, family: xr.Dataset, shooting: Shooting, parameter: str,
-                 values: tuple = (1e-5, 2e-5), unperturbed: System | None = None) -> xr.Dataset:
-    """The Melnikov drift of every orbit of ``family`` (from :func:`symmetric_family` at the parameters stored in
-    it, where ``parameter`` is 0) when ``parameter`` takes the small ``values``: ``drift`` [amplitude units per
-    revolution per unit parameter], ``drift_rate`` (the same per unit time), ``drift_check`` (difference between
-    the two values, relative to the larger of the drift and the family's median drift), ``resonance_gap``
-    (distance of the return map's nearest other eigenvalue from 1), ``branch_point`` (1 where another multiplier
-    passes 1 between the orbit and the next: the family branches there and the drift has a pole) and
-    ``drift_valid`` (1 where the return map has an eigenvalue within ONE_TOL of 1, the gap exceeds
-    RESONANCE_GAP, the two values agree to DRIFT_AGREEMENT, and the orbit is at no fold and next to no branch
-    point). The family tangent comes from re-shot members at
-    amplitude +- 1e-6 (relative). The family's end members are not evaluated.
-    ``unperturbed``: the same system written with ``parameter`` = 0 in its expressions, where the family was
-    computed on it (heyoka's Taylor coefficients of 0 * g overflow where g is singular, and 0 * inf is no 0);
-    it runs the return map at 0, ``system`` at the small values."""
-    if not isinstance(family, xr.Dataset) or family.attrs.get("kind") != "symmetric_family":
-        raise ParameterError("family: give a dataset of dynamics.symmetric_families.symmetric_family")
-    config = json.loads(family.attrs["config"])
-    base_system = system if unperturbed is None else unperturbed
-    for candidate in (system, base_system):
-        if sorted(candidate.parameter_names) != sorted(config["pars"]) or family.attrs.get("system") not in (
-                system.name, base_system.name):
-            raise ParameterError(f"the family was computed on {family.attrs.get('system')!r}, not on "
-                                 f"{candidate.name!r}; give the system it was computed on")
-    try:
-        values = tuple(float(v) for v in values)
-    except TypeError:
-        raise ParameterError(f"values = {values!r}: give two different small nonzero values of {parameter}") from None
-    if len(values) != 2 or not all(math.isfinite(v) and v != 0 for v in values) or values[0] == values[1]:
-        raise ParameterError(f"values = {values!r}: give two different small nonzero values of {parameter}")
-    shooter, base_shooter = Shooter(system, shooting), Shooter(base_system, shooting)
-    pars = system.with_pars([config["pars"][n] for n in system.parameter_names])
-    index = system.parameter_index(parameter)
-    if pars[index] != 0.0:
-        raise ParameterError(f"the family was computed at {parameter} = {pars[index]:g}; compute it at 0")
-    crossings, periods = family.crossing.values, family.period.values
-    amplitude = family.amplitude.values
-    free = family.start.sel(state=shooting.free).values if shooting.free else [None] * len(amplitude)
-    n, size = system.n, len(amplitude)
-    drift = np.full((size, 2), np.nan)
-    gap, transverse, no_one = np.zeros(size), np.zeros(size), np.zeros(size, bool)
-    for k in range(1, size - 1):
-        x0, period = crossings[k], periods[k]
-        skip = SKIP * period
-        base = base_shooter.run(x0, pars, skip)
-        tangent = base_shooter.tangent(amplitude[k], free[k], pars)
-        if base is None or tangent is None:
-            continue
-        D = np.zeros((n, n))
-        for j in range(n):
-            h = FD_STEP * max(1.0, abs(x0[j]))
-            hit = base_shooter.run(x0 + h * np.eye(n)[j], pars, skip)
-            if hit is None:
-                break
-            D[:, j] = (hit[0] - base[0]) / h
-        else:
-            w, left = np.linalg.eig(D.T)
-            one = int(np.argmin(np.abs(w - 1.0)))
-            if abs(w[one] - 1.0) > ONE_TOL:  # two multipliers near 1 split (a fold or a resonance): no l
-                no_one[k] = True
-                continue
-            flow = int(np.argmin(np.abs(np.where(np.arange(n) == one, np.inf, w))))  # the flow's eigenvalue 0
-            others = np.delete(w, [one, flow])
-            gap[k] = float(np.min(np.abs(others - 1.0))) if others.size else math.inf
-            transverse[k] = float(np.prod(others - 1.0).real) if others.size else 1.0
-            ell = left[:, one].real
-            for i, value in enumerate(values):
-                perturbed = pars.copy()
-                perturbed[index] = value
-                hit = shooter.run(x0, perturbed, skip)
-                if hit is not None:
-                    drift[k, i] = float(ell @ (hit[0] - base[0]) / value / (ell @ tangent))
-    finite = np.all(np.isfinite(drift), axis=1)
-    typical = float(np.median(np.abs(drift[finite, 1]))) if finite.any() else 0.0
-    check = np.where(finite, np.abs(drift[:, 0] - drift[:, 1]) / np.maximum(np.abs(drift[:, 1]), max(typical, 1e-300)),
-                     np.inf)
-    branch = np.zeros(size, np.int8)
-    crossed = (transverse[1:-2] * transverse[2:-1] < 0)  # another multiplier passes 1 between k and k + 1
-    branch[1:-2] |= crossed
-    branch[2:-1] |= crossed
-    fold = family.fold.values
-    near_fold = np.array([fold[max(k - 1, 0): k + 2].any() for k in range(size)])
-    valid = (finite & (check <= DRIFT_AGREEMENT) & (gap > RESONANCE_GAP) & ~near_fold & (branch == 0)).astype(np.int8)
-    drift[~finite] = 0.0
-    check[~finite] = 0.0
-    units = _units_product(system.units_of(shooting.vary), system.units_of(parameter), -1)
-    out = family.copy()
-    out["drift"] = ("orbit", drift[:, 1], {"units": units, "long_name": f"change of the amplitude per revolution per "
-                                           f"unit {parameter} (Melnikov), at {parameter} = {values[1]:g}"})
-    out["drift_rate"] = ("orbit", drift[:, 1] / periods, {"units": _units_product(units, system.time_units, -1),
-                                                          "long_name": f"drift per unit time per unit {parameter}"})
-    out["drift_check"] = ("orbit", check, {"units": "1", "long_name": f"difference of the drift at {parameter} = "
-                                           f"{values[0]:g} and {values[1]:g}, relative"})
-    out["resonance_gap"] = ("orbit", gap, {"units": "1", "long_name": "distance from 1 of the return map's nearest "
-                                           "other eigenvalue"})
-    out["branch_point"] = ("orbit", branch, flag_attrs("another multiplier passes 1 next to this orbit",
-                                                       {"no": 0, "yes": 1}))
-    out["drift_valid"] = ("orbit", valid, flag_attrs("whether the drift is defined and checked (0: an end "
-                                                     "member, a fold, a branch point, a resonance or a failed "
-                                                     "check)", {"no": 0, "yes": 1}))
-    n_valid, inner = int(valid.sum()), max(size - 2, 0)
-    inner_ = slice(1, -1)
-    reasons = {"no eigenvalue 1 of the return map": int(no_one.sum()),
-               "not finite": int((~finite & ~no_one)[inner_].sum()),
-               "nonlinear in " + parameter: int((finite & (check > DRIFT_AGREEMENT))[inner_].sum()),
-               "resonance": int((finite & (gap <= RESONANCE_GAP))[inner_].sum()),
-               "next to a fold": int(near_fold[inner_].sum()), "next to a branch point": int(branch[inner_].sum())}
-    failed = ", ".join(f"{count} {why}" for why, count in reasons.items() if count)
-    status = "completed" if n_valid else "degenerate"
-    message = f"drift of {n_valid} of {inner} inner orbits checked" + (f" (not: {failed})" if failed else "")
-    cfg = {**config, "parameter": parameter, "values": list(values)}
-    out.attrs = make_attrs("symmetric_family", cfg, status, message, system=family.attrs.get("system"))
-    return out
