@@ -177,6 +177,21 @@ def test_the_lower_spins_homoclinic_orbit_returns_to_it():
     assert nc.homoclinic_spin(bracket=(30.0, 31.0))["status"] == "no_crossing"
 
 
+def test_on_the_r60_disk_the_hopf_point_is_subcritical():
+    """The drilled disk with r = 60 mm has no cycle just below its omega_c, and its repelling cycle grows out of the
+    spin above it like the square root of the distance to omega_c (a subcritical Hopf point)."""
+    disk = Disk.from_geometry(r=0.06)
+    setup = Setup(disk=disk)
+    omega_c = cs.omega_critical(disk).omega_critical
+    assert nc.cycles(nc.drift(omega_c - 0.002, setup, max_amplitude=0.5, max_points=40))["status"] == "none_decays"
+    sizes = []
+    for d in (0.0005, 0.002):
+        found = nc.cycles(nc.drift(omega_c + d, setup, max_amplitude=0.5, max_points=40))["cycles"]
+        assert [c["kind"] for c in found] == ["repelling"]
+        sizes.append(found[0]["amplitude"] / math.sqrt(d))
+    assert sizes[1] == pytest.approx(sizes[0], rel=0.1)  # a* ~ sqrt(Omega - omega_c)
+
+
 def test_bad_spins_are_refused_in_one_line():
     with pytest.raises(ParameterError, match="held spin"):
         nc.family(-3.0)
