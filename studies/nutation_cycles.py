@@ -21,7 +21,6 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
-from scipy.integrate import solve_ivp
 from tippedisk_studies._common import finish, prepare
 
 import tippedisk_analysis as td
@@ -49,7 +48,7 @@ def held_cycle(ds: xr.Dataset, spin: float, cycle: dict) -> dict:
                           nc._pars(spin, None, ORBIT_EPS))
     if not orbit.converged:
         return {"status": orbit.status, "message": orbit.message}
-    return {"status": "converged", "amplitude": float(0.5 * math.pi - orbit.samples[:, 1].min()),
+    return {"status": "converged", "amplitude": nc.orbit_amplitude(orbit.samples),
             "period": float(orbit.period), "family_multiplier": float(np.sort(np.abs(orbit.multipliers.real[
                 np.abs(orbit.multipliers.imag) < 1e-9]))[-1]), "message": orbit.message}
 
@@ -67,13 +66,8 @@ def held_run(ds: xr.Dataset, spin: float, amplitude: float) -> dict:
     times = times[: len(states)]
     gamma, gamma_dot = states[:, 1], states[:, 3]
     turns = np.flatnonzero((gamma_dot[:-1] < 0) & (gamma_dot[1:] >= 0))
-    valid = ds.drift_valid.values.astype(bool) & (np.arange(a.size) < np.flatnonzero(ds.fold.values)[0])
-    order = np.argsort(a[valid])
-    rate = ds.amplitude_rate.values[valid][order]
-    averaged = solve_ivp(lambda s, y: [np.interp(y[0], a[valid][order], rate)], (0.0, RUN_EPS * times[turns[-1]]),
-                         [a[k]], dense_output=True, rtol=1e-9, atol=1e-12)
     return {"times": times, "states": states, "turn_times": times[turns], "measured": 0.5 * math.pi - gamma[turns],
-            "averaged": averaged.sol(RUN_EPS * times[turns])[0]}
+            "averaged": nc.averaged_amplitude(ds, a[k], RUN_EPS * times[turns])}
 
 
 def curve_dataset(rows: list, spins_without: list, fold: dict) -> xr.Dataset:

@@ -30,6 +30,7 @@ import numbers
 import numpy as np
 import xarray as xr
 
+from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from ..dynamics import Event, Options
@@ -40,7 +41,7 @@ from ..parameters import Setup
 from . import critical_spin, inversion
 
 __all__ = ["SHOOTING", "EPS_PROBES", "family", "drift", "cycles", "repelling_cycle", "fold_of_cycles",
-           "amplitude_of", "homoclinic_spin"]
+           "amplitude_of", "orbit_amplitude", "averaged_amplitude", "homoclinic_spin"]
 
 _gamma = held_spin.rolling_system().variables[1]
 SHOOTING = Shooting(fixed={"beta": 0.5 * math.pi, "gamma_dot": 0.0}, vary="gamma", free="beta_dot",
@@ -66,6 +67,27 @@ def _pars(spin: float, setup: Setup | None, eps: float = 0.0) -> np.ndarray:
 def amplitude_of(ds: xr.Dataset) -> np.ndarray:
     """a = pi/2 - gamma at the family's starts [rad]."""
     return 0.5 * math.pi - ds.amplitude.values
+
+
+def orbit_amplitude(states: np.ndarray) -> float:
+    """a = pi/2 - the smallest gamma [rad] over samples (N, 4) of a nutation orbit (e.g. a PeriodicOrbit's)."""
+    return float(0.5 * math.pi - np.asarray(states)[:, 1].min())
+
+
+def averaged_amplitude(ds: xr.Dataset, start: float, slow_times) -> np.ndarray:
+    """The nutation amplitude [rad] at the slow times eps t [m] (increasing, from 0) of the averaged flow
+    d a / d(eps t) = D(a) of a :func:`drift` dataset (its checked members up to the first fold, interpolated),
+    from ``start`` [rad]."""
+    _check_drift(ds)
+    a = amplitude_of(ds)
+    end = np.flatnonzero(ds.fold.values)
+    keep = ds.drift_valid.values.astype(bool) & (np.arange(a.size) < (end[0] if end.size else a.size))
+    order = np.argsort(a[keep])
+    grid, rate = a[keep][order], ds.amplitude_rate.values[keep][order]
+    times = np.asarray(slow_times, dtype=float)
+    flow = solve_ivp(lambda _s, y: [np.interp(y[0], grid, rate)], (0.0, times[-1]), [float(start)],
+                     dense_output=True, rtol=1e-9, atol=1e-12)
+    return flow.sol(times)[0]
 
 
 def family(spin: float, setup: Setup | None = None, *, max_amplitude: float = 3.1, max_points: int = 150) -> xr.Dataset:
@@ -156,8 +178,12 @@ def cycles(ds: xr.Dataset, refine: bool = True) -> dict:
         brackets.append((a[i], rate[i], free[i], j))
     found = []
     for a_low, rate_low, free_low, j in brackets:
-        def rate_at(x, a_low=a_low, free_low=free_low, j=j):
-            return _member(ds, x, free_low + (x - a_low) / (a[j] - a_low) * (free[j] - free_low))
+        known: dict = {}
+
+        def rate_at(x, a_low=a_low, free_low=free_low, j=j, known=known):  # each member is shot once
+            if x not in known:
+                known[x] = _member(ds, x, free_low + (x - a_low) / (a[j] - a_low) * (free[j] - free_low))
+            return known[x]
 
         amplitude = a_low + rate_low / (rate_low - rate[j]) * (a[j] - a_low)  # interpolated, unless refined
         if refine:
