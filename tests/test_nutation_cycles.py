@@ -98,6 +98,8 @@ def test_the_hopf_point_is_supercritical_and_a_fold_of_cycles_follows_it_closely
         assert np.sign(family - 1.0) == side
     above = nc.cycles(nc.drift(30.5, max_amplitude=2.6))["cycles"]
     assert [c["kind"] for c in above] == ["repelling"]
+    short = nc.cycles(nc.drift(30.5, max_amplitude=1.6, max_points=20))  # ends at a = 1.1 rad, below the cycle
+    assert short["status"] == "incomplete" and "max_points" in short["message"]
     tiny = nc.cycles(nc.drift(30.232, max_amplitude=0.6, max_points=40))["cycles"]
     assert [c["kind"] for c in tiny] == ["attracting", "repelling"] and tiny[0]["amplitude"] < 0.02
 

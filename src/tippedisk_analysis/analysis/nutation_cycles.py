@@ -158,7 +158,9 @@ def cycles(ds: xr.Dataset, refine: bool = True) -> dict:
     amplitude averaged over the phase) or ``attracting``. A cycle below the family's first checked member is
     found from the sign of the smallest nutations (the spin's own eigenvalues). Status ``completed`` (at least
     one), ``none_decays`` (the nutation grows at every amplitude), ``all_decay`` (it decays at every amplitude up
-    to the fold) or ``unchecked`` (a sign change next to an orbit whose drift is not checked)."""
+    to the fold, or to max_amplitude where the family has none there), ``incomplete`` (the family ended short of
+    both, e.g. at max_points; with a ``message``) or ``unchecked`` (a sign change next to an orbit whose drift is
+    not checked)."""
     _check_drift(ds)
     a, rate = amplitude_of(ds), ds.amplitude_rate.values
     free = ds.start.sel(state=SHOOTING.free).values
@@ -207,6 +209,9 @@ def cycles(ds: xr.Dataset, refine: bool = True) -> dict:
                       "kind": "repelling" if rate_low < 0 else "attracting"})
     if found:
         return {"cycles": found, "status": "completed"}
+    if not first.size and ds.attrs.get("status") != "completed":  # the family ended short of its fold and bound
+        return {"cycles": [], "status": "incomplete", "message": f"the family ended at a = {a.max():.4g} rad "
+                f"({ds.attrs.get('message')}); no cycle below it: give more max_points"}
     return {"cycles": [], "status": "all_decay" if rate[idx[0]] < 0 else "none_decays"}
 
 

@@ -411,7 +411,8 @@ def family_drift(system: System, family: xr.Dataset, shooting: Shooting, paramet
     ``branch_point`` (1 where another multiplier passes 1 between the orbit and the next: the family branches)
     and ``drift_valid`` (1 where the period map has an eigenvalue within ONE_TOL of 1, the gap exceeds
     RESONANCE_GAP, the two values agree to DRIFT_AGREEMENT, and the orbit is at no fold and next to no branch
-    point). The family's end members are not evaluated.
+    point). The family's end members are not evaluated. Status: the family's own when it ended short (e.g.
+    ``max_points``), else ``completed`` (or ``degenerate``: no orbit passed the checks).
     ``unperturbed``: the same system written with ``parameter`` = 0 in its expressions, where the family was
     computed on it (heyoka's Taylor coefficients of 0 * g overflow where g is singular, and 0 * inf is no 0);
     it runs the period map at 0, ``system`` at the small values."""
@@ -475,9 +476,11 @@ def family_drift(system: System, family: xr.Dataset, shooting: Shooting, paramet
     failed = ", ".join(f"{count} {why}" for why, count in reasons.items() if count)
     n_valid = int(valid.sum())
     message = f"drift of {n_valid} of {size - 2} inner orbits checked" + (f" (not: {failed})" if failed else "")
+    status = "completed" if n_valid else "degenerate"
+    if family.attrs.get("status") != "completed":  # the family itself ended short: that stays its status
+        status, message = family.attrs.get("status"), f"{family.attrs.get('message')}; {message}"
     cfg = {**config, "parameter": parameter, "values": list(values)}
-    out.attrs = make_attrs("symmetric_family", cfg, "completed" if n_valid else "degenerate", message,
-                           system=family.attrs.get("system"))
+    out.attrs = make_attrs("symmetric_family", cfg, status, message, system=family.attrs.get("system"))
     return out
 
 
