@@ -171,6 +171,15 @@ print(ds.attrs["message"])  # how many orbits' drift passed its checks
 # the nutation cycles: inside the repelling one the nutation decays at this held spin, outside it grows
 print(nc.cycles(ds))
 ''',
+    "tippedisk_analysis.analysis.free_nutation": '''
+from tippedisk_analysis.analysis import free_nutation as fn
+
+# (N1) at one orbit: the nutation amplitude's and the spin's rates in the slow time eps t
+print(fn.rates(1.0, 30.5))
+# the averaged path from a = 1.2 rad, Omega0 = 32 rad/s over eps t = 0.1 m
+path = fn.averaged_path(1.2, 32.0, 0.1)
+print(path.attrs["status"], float(path.amplitude[-1]), float(path.spin[-1]))
+''',
     "tippedisk_analysis.plotting": '''
 import tippedisk_analysis as td
 from tippedisk_analysis.plotting import plot_dataset

@@ -58,6 +58,7 @@ API_MODULES = (
     ("tippedisk_analysis.analysis.critical_spin", "The critical spin in closed form"),
     ("tippedisk_analysis.analysis.spin_passage", "After the inversion: the passage along the inverted spins"),
     ("tippedisk_analysis.analysis.nutation_cycles", "The held model's nutation cycles"),
+    ("tippedisk_analysis.analysis.free_nutation", "The free disk's nutation, averaged"),
     ("tippedisk_analysis.plotting", "Figures and animations"),
     ("tippedisk_analysis.solvers.moreau", "Moreau time stepping"),
 )

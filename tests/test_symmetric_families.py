@@ -177,3 +177,32 @@ def test_a_section_the_start_lies_on_or_a_wrong_period_factor_is_refused():
         call = {"bounds": (0.0, 3.0), "amplitudes": [1.0], **kwargs}
         with pytest.raises(ParameterError):
             symmetric_family(system, PENDULUM, (1.0, None), call.pop("bounds"), **call)
+
+
+def test_the_drift_of_a_family_of_families_is_the_averaged_flow():
+    """x'' + w(z)^2 x = p (mu - x^2) x', z' = p (x^2 - z), w = 1 + z/2: at p = 0 every (A, z) is a circle of
+    amplitude A at frequency w(z), a two-parameter family (reversors (x, v, z) -> (x, -v, z) and (-x, v, z)).
+    Averaging (x = A cos th) gives dz/dt = p (A^2/2 - z) and dA/dt = p [A/2 (mu - A^2/4) - A w'/(2 w) (A^2/2 - z)
+    + w' A^3 / (8 w)]: van der Pol's term; the adiabatic invariant A^2 w of the oscillator retuned by the mean
+    drift of z; and the retuning within a revolution, z - <z> = p A^2 sin(2 th) / (4 w), whose force
+    -2 w w' (z - <z>) x adds p w' A^3 / (8 w). A drift along a coordinate that is not a
+    fixed start value is refused."""
+    xs, vs, zs = hy.make_vars("x", "v", "z")
+    freq = 1.0 + 0.5 * zs
+    system = dy.System("retuned_vdp", [xs, vs, zs], [vs, -freq**2 * xs + hy.par[0] * (hy.par[1] - xs**2) * vs,
+                                                       hy.par[0] * (xs**2 - zs)], parameters={"p": 0.0, "mu": 1.0})
+    mu = 1.0
+    for amplitude, z in ((1.5, 0.4), (0.6, -0.3), (2.2, 1.0)):
+        shooting = Shooting(fixed={"v": 0.0, "z": z}, vary="x", section=dy.Event("crossed", xs, "negative"),
+                            period_factor=4.0)
+        found = dy.drift_at(system, shooting, amplitude, None, {"p": 0.0, "mu": mu}, "p", along=("z",))
+        w = 1.0 + 0.5 * z
+        rate_a = (amplitude / 2 * (mu - amplitude**2 / 4) - amplitude * 0.5 / (2 * w) * (amplitude**2 / 2 - z)
+                  + 0.5 * amplitude**3 / (8 * w))
+        rate_z = amplitude**2 / 2 - z
+        assert found["valid"] and found["check"] < 1e-2
+        assert found["period"] == pytest.approx(2 * math.pi / w, rel=1e-10)
+        assert found["drift"] / found["period"] == pytest.approx(rate_a, rel=1e-4, abs=1e-6)
+        assert found["along_drift"]["z"] / found["period"] == pytest.approx(rate_z, rel=1e-4, abs=1e-6)
+    with pytest.raises(ParameterError, match="along"):
+        dy.drift_at(system, shooting, 1.0, None, {"p": 0.0, "mu": mu}, "p", along=("x",))

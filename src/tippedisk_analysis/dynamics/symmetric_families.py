@@ -123,9 +123,10 @@ class Shooter:
         self.plain = system.taylor(tol)
         self.index = {name: system.state_index(name) for name in system.state_names}
 
-    def start(self, amplitude: float, free: float | None) -> np.ndarray:
+    def start(self, amplitude: float, free: float | None, fixed: dict | None = None) -> np.ndarray:
+        """The start state; ``fixed`` overrides some of the Shooting's fixed values (a neighbouring family)."""
         x = np.zeros(self.system.n)
-        for name, value in self.shooting.fixed.items():
+        for name, value in {**self.shooting.fixed, **(fixed or {})}.items():
             x[self.index[name]] = value
         x[self.index[self.shooting.vary]] = amplitude
         if self.shooting.free:
@@ -173,13 +174,13 @@ class Shooter:
                         f"{self.shooting.period_factor:g} is {k} times too large")
         return ""
 
-    def solve_free(self, amplitude: float, guess: float, pars: np.ndarray) -> float:
-        """The free start coordinate of the member with ``amplitude``, by secant steps from ``guess`` (NaN if
-        they fail)."""
+    def solve_free(self, amplitude: float, guess: float, pars: np.ndarray, fixed: dict | None = None) -> float:
+        """The free start coordinate of the member with ``amplitude`` (and the ``fixed`` overrides), by secant
+        steps from ``guess`` (NaN if they fail)."""
         condition = self.index[self.shooting.condition]
 
         def residual(b):
-            hit = self.run(self.start(amplitude, b), pars)
+            hit = self.run(self.start(amplitude, b, fixed), pars)
             return np.nan if hit is None else hit[0][condition]
 
         try:
@@ -188,18 +189,24 @@ class Shooter:
             return math.nan
         return float(value) if math.isfinite(value) and abs(residual(value)) < 1e-9 else math.nan
 
-    def tangent(self, amplitude: float, free: float | None, pars: np.ndarray) -> np.ndarray | None:
-        """d(crossing state)/d(amplitude) along the family, by central differences of re-shot members (the free
-        coordinate solved again at each); None where a neighbour cannot be shot."""
-        h = TANGENT_STEP * max(1.0, abs(amplitude))
-        ends = []
-        for a in (amplitude - h, amplitude + h):
-            b = None if free is None else self.solve_free(a, free, pars)
-            hit = None if b is not None and not math.isfinite(b) else self.run(self.start(a, b), pars)
-            if hit is None:
-                return None
-            ends.append(hit[0])
-        return (ends[1] - ends[0]) / (2 * h)
+    def tangents(self, amplitude: float, free: float | None, pars: np.ndarray, along: tuple = ()) -> np.ndarray | None:
+        """d(crossing state)/d(amplitude) and d(crossing state)/d(fixed value) for each name in ``along``, the
+        columns of an (n, 1 + len(along)) array, by central differences of re-shot members (the free coordinate
+        solved again at each); None where a neighbour cannot be shot."""
+        columns = []
+        for name in (None, *along):
+            value = amplitude if name is None else self.shooting.fixed[name]
+            h = TANGENT_STEP * max(1.0, abs(value))
+            ends = []
+            for step in (-h, h):
+                a, fixed = (amplitude + step, None) if name is None else (amplitude, {name: value + step})
+                b = None if free is None else self.solve_free(a, free, pars, fixed)
+                hit = None if b is not None and not math.isfinite(b) else self.run(self.start(a, b, fixed), pars)
+                if hit is None:
+                    return None
+                ends.append(hit[0])
+            columns.append((ends[1] - ends[0]) / (2 * h))
+        return np.column_stack(columns)
 
 
 class _FamilyProblem(Problem):
@@ -314,17 +321,19 @@ def symmetric_family(system: System, shooting: Shooting, start: tuple, bounds: t
 
 
 def _orbit_drift(shooters: tuple, x0: np.ndarray, period: float, amplitude: float, free, pars: np.ndarray,
-                 index: int, values: tuple) -> dict:
-    """One orbit's drift (at p -> 0, extrapolated from ``values``), the two measured values, the resonance gap,
-    the product of (mu - 1) over the transverse multipliers (its sign change between members marks a branch
-    point) and whether the period map has an eigenvalue 1 (``one``)."""
+                 index: int, values: tuple, along: tuple = ()) -> dict:
+    """One orbit's drift (at p -> 0, extrapolated from ``values``) of the amplitude and of the fixed start values
+    named in ``along`` (a family of families: an array of 1 + len(along)), the two measured values of each, the
+    resonance gap, the product of (mu - 1) over the transverse multipliers (its sign change between members marks
+    a branch point) and whether the period map has as many eigenvalues 1 as the family has parameters (``one``)."""
     shooter, base_shooter = shooters
-    n = len(x0)
-    out = {"drift": math.nan, "measured": (math.nan, math.nan), "gap": 0.0, "transverse": 0.0, "one": True}
+    n, k = len(x0), 1 + len(along)
+    out = {"drift": np.full(k, math.nan), "measured": np.full((k, 2), math.nan), "gap": 0.0, "transverse": 0.0,
+           "one": True}
     skip = period * (1.0 - 0.5 / shooter.shooting.period_factor)  # the next crossing is the one a period on
     base = base_shooter.run(x0, pars, skip)
-    tangent = base_shooter.tangent(amplitude, free, pars)
-    if base is None or tangent is None:
+    tangents = base_shooter.tangents(amplitude, free, pars, along)
+    if base is None or tangents is None:
         return out
     D = np.zeros((n, n))
     for j in range(n):
@@ -333,23 +342,27 @@ def _orbit_drift(shooters: tuple, x0: np.ndarray, period: float, amplitude: floa
         if hit is None:
             return out
         D[:, j] = (hit[0] - base[0]) / h
-    w, left = np.linalg.eig(D.T)
-    one = int(np.argmin(np.abs(w - 1.0)))
-    if abs(w[one] - 1.0) > ONE_TOL:  # two multipliers near 1 split (a fold or a resonance): no l
+    w = np.linalg.eigvals(D)
+    order = np.argsort(np.abs(w - 1.0))
+    if abs(w[order[k - 1]] - 1.0) > ONE_TOL:  # two multipliers near 1 split (a fold or a resonance): no l
         return {**out, "one": False}
-    flow = int(np.argmin(np.abs(np.where(np.arange(n) == one, np.inf, w))))  # the flow's eigenvalue 0
-    others = np.delete(w, [one, flow])
+    rest = w[order[k:]]
+    others = np.delete(rest, np.argmin(np.abs(rest)))  # without the flow's eigenvalue 0
     out["gap"] = float(np.min(np.abs(others - 1.0))) if others.size else math.inf
     out["transverse"] = float(np.prod(others - 1.0).real) if others.size else 1.0
-    ell = left[:, one].real
+    ell = np.linalg.svd(D - np.eye(n))[0][:, -k:]  # the left null space of DP0 - I: l^T DP0 = l^T
+    projected = ell.T @ tangents
+    if not np.all(np.isfinite(projected)) or np.linalg.cond(projected) > 1e12:
+        return out
     measured = []
     for value in values:
         perturbed = pars.copy()
         perturbed[index] = value
         hit = shooter.run(x0, perturbed, skip)
-        measured.append(math.nan if hit is None else float(ell @ (hit[0] - base[0]) / value / (ell @ tangent)))
+        measured.append(np.full(k, math.nan) if hit is None else
+                        np.linalg.solve(projected, ell.T @ (hit[0] - base[0]) / value))
     (v1, v2), (d1, d2) = values, measured
-    out["measured"] = (d1, d2)
+    out["measured"] = np.column_stack([d1, d2])
     out["drift"] = (v2 * d1 - v1 * d2) / (v2 - v1)  # linear in p: the value at p = 0
     return out
 
@@ -374,15 +387,24 @@ def _drift_setup(system, shooting, pars_by_name, parameter, values, unperturbed)
 
 
 def drift_at(system: System, shooting: Shooting, amplitude: float, free_guess, pars, parameter: str,
-             values: tuple = (1e-5, 2e-5), unperturbed: System | None = None) -> dict:
+             values: tuple = (1e-5, 2e-5), unperturbed: System | None = None, along: tuple = ()) -> dict:
     """The drift (per revolution per unit ``parameter``, extrapolated to 0) of the member of the family with
     ``amplitude`` (free coordinate solved from ``free_guess``) at ``pars`` (``parameter`` 0): {"drift",
-    "period", "check", "valid"} (valid: an eigenvalue 1, no resonance, the two values agree); a zero of it
-    between two members is a cycle located exactly (see :func:`family_drift` for the rest)."""
+    "period", "check", "valid", "free"} (valid: an eigenvalue 1, no resonance; check: the two values' relative
+    difference; free: the solved free coordinate); a zero of it
+    between two members is a cycle located exactly (see :func:`family_drift` for the rest).
+
+    ``along``: names of ``fixed`` start coordinates that label the family too (a family of families, e.g. a
+    conserved quantity's value or a state every member starts with): their drift per revolution comes as
+    ``along_drift`` {name: value}, from the period map's left null space of the dimension 1 + len(along); the
+    check then compares the two measured drift vectors, each component in units of its state scale."""
     try:
         vector = system.with_pars(None, **pars) if isinstance(pars, dict) else system.with_pars(pars)
     except (TypeError, ValueError):
         raise ParameterError(f"pars: give the values of {', '.join(system.parameter_names)}") from None
+    if isinstance(along, str) or any(name not in shooting.fixed for name in along) or len(set(along)) != len(along):
+        raise ParameterError(f"along = {along!r}: give names of the Shooting's fixed start values "
+                             f"({', '.join(shooting.fixed)}), each once")
     pars = dict(zip(system.parameter_names, map(float, vector)))
     shooters, pars, index, values = _drift_setup(system, shooting, pars, parameter, values, unperturbed)
     base = shooters[1]
@@ -394,11 +416,16 @@ def drift_at(system: System, shooting: Shooting, amplitude: float, free_guess, p
     if hit is None:
         raise ParameterError(f"the member at {shooting.vary} = {amplitude:.6g} does not reach the section")
     period = shooting.period_factor * hit[1]
-    found = _orbit_drift(shooters, hit[0], period, amplitude, free, pars, index, values)
-    d1, d2 = found["measured"]
-    check = abs(d1 - d2) / max(abs(d2), 1e-300)
-    valid = found["one"] and math.isfinite(found["drift"]) and found["gap"] > RESONANCE_GAP
-    return {"drift": found["drift"], "period": period, "check": check, "valid": bool(valid)}
+    found = _orbit_drift(shooters, hit[0], period, amplitude, free, pars, index, values, tuple(along))
+    scale = np.array([system.state_scale[system.state_index(name)] for name in (shooting.vary, *along)])
+    d1, d2 = (found["measured"][:, j] / scale for j in (0, 1))
+    check = float(np.linalg.norm(d1 - d2) / max(np.linalg.norm(d2), 1e-300))
+    drift = found["drift"]
+    valid = found["one"] and bool(np.all(np.isfinite(drift))) and found["gap"] > RESONANCE_GAP
+    out = {"drift": float(drift[0]), "period": period, "check": check, "valid": bool(valid), "free": free}
+    if along:
+        out["along_drift"] = dict(zip(along, map(float, drift[1:])))
+    return out
 
 
 def family_drift(system: System, family: xr.Dataset, shooting: Shooting, parameter: str,
@@ -437,7 +464,7 @@ def family_drift(system: System, family: xr.Dataset, shooting: Shooting, paramet
     gap, transverse, no_one = np.zeros(size), np.zeros(size), np.zeros(size, bool)
     for k in range(1, size - 1):
         found = _orbit_drift(shooters, crossings[k], periods[k], amplitude[k], free[k], pars, index, values)
-        drift[k], measured[k], gap[k], transverse[k] = found["drift"], found["measured"], found["gap"], found[
+        drift[k], measured[k], gap[k], transverse[k] = found["drift"][0], found["measured"][0], found["gap"], found[
             "transverse"]
         no_one[k] = not found["one"]
     finite = np.isfinite(drift) & np.all(np.isfinite(measured), axis=1)

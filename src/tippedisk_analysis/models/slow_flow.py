@@ -52,6 +52,9 @@ from .variables import PARAMETER_UNITS
 PARAMETER_NAMES = ("m", "e", "r", "A", "B", "C", "gravity", "mu", "eps", "fall_angle")
 """Runtime parameters: the rolling model's, with eps at the index it has in the ODE models (hy.par[8])."""
 STATE_NAMES = rolling.REDUCED_STATE_NAMES
+EULER_STATE_NAMES = ("beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot")
+EULER_STATE_UNITS = {"beta": "rad", "gamma": "rad", "alpha_dot": "rad s-1", "beta_dot": "rad s-1",
+                     "gamma_dot": "rad s-1"}
 FORCE_SMOOTHING = 1e-12  # N: |lambda_T| = sqrt(|lambda_T|^2 + delta^2) - delta
 CONE_RESERVE = 0.05  # the flow ends where |lambda_T| reaches (1 - CONE_RESERVE) mu lambda_N: |h| = 19 there
 OBSERVABLE_UNITS = {"E_tot": "J", "friction_power": "W", "slip": "m s-1", "lambda_N": "N", "cone_margin": "N",
@@ -76,24 +79,28 @@ class SlowFlow:
 
 
 def slow_dynamics(variables, trig: Trig, *, pars=P, sqrt=hy.sqrt, diff=hy.diff,
-                  smoothing=FORCE_SMOOTHING, hold_spin=False) -> SlowFlow:
+                  smoothing=FORCE_SMOOTHING, hold_spin=False, euler_rates=False) -> SlowFlow:
     """The slow flow (S1-S3) at the reduced state ``variables`` with orientation ``trig``. heyoka's
     expressions by default; sympy symbols with sympy.sqrt and sympy.diff give the same in sympy.
     hold_spin: the held-spin model of :mod:`.held_spin`: ``variables`` are (beta, gamma, beta_dot, gamma_dot)
-    and the spin alpha_dot = pars["spin"] is held by a torque about the vertical (rhs: their rates)."""
-    if hold_spin:
-        _beta, _gamma, beta_d, gamma_d = variables
-        spin = pars["spin"]
+    and the spin alpha_dot = pars["spin"] is held by a torque about the vertical (rhs: their rates).
+    euler_rates: the same free flow in the state EULER_STATE_NAMES (beta, gamma, alpha_dot, beta_dot, gamma_dot)
+    instead of the body angular velocity (:func:`euler_system`)."""
+    if hold_spin or euler_rates:
+        spin, beta_d, gamma_d = (pars["spin"], *variables[2:]) if hold_spin else variables[2:]
         omega = trig.B_from_G([beta_d, spin * trig.sb, spin * trig.cb + gamma_d])
     else:
         _beta, _gamma, *omega = variables
 
     def rates(dyn: rolling.RollingDynamics) -> list:
-        if not hold_spin:
+        if not (hold_spin or euler_rates):
             return [dyn.euler_rates[1], dyn.euler_rates[2], *dyn.psi]
-        # dW/dt = Psi_G + gamma_dot e_z x W with W = (beta_dot, spin sb, spin cb + gamma_dot), alpha_ddot = 0
+        # dW/dt = Psi_G + gamma_dot e_z x W with W = (beta_dot, alpha_dot sb, alpha_dot cb + gamma_dot)
         psi_G = trig.G_from_B(dyn.psi)
-        return [beta_d, gamma_d, psi_G[0] - gamma_d * spin * trig.sb, psi_G[2] + spin * trig.sb * beta_d]
+        spin_dd = 0.0 if hold_spin else (psi_G[1] + (gamma_d - spin * trig.cb) * beta_d) / trig.sb
+        angles = [beta_d, gamma_d, psi_G[0] - gamma_d * spin * trig.sb,
+                  psi_G[2] + spin * trig.sb * beta_d - spin_dd * trig.cb]
+        return angles if hold_spin else [beta_d, gamma_d, spin_dd, *angles[2:]]
 
     roll = rolling.rolling_dynamics(trig, omega, hold_spin=hold_spin, pars=pars, sqrt=sqrt)
     f_roll = rates(roll)
@@ -135,6 +142,32 @@ def system() -> System:
                   units={**rolling.REDUCED_STATE_UNITS, **{k: PARAMETER_UNITS[k] for k in PARAMETER_NAMES}},
                   time_units="s", compact_mode=True,
                   description="the slow flow of the smooth tippedisk: rolling with the first-order slip eps h")
+
+
+@functools.lru_cache(maxsize=None)
+def euler_system(rolling_only: bool = False) -> System:
+    """The slow flow (S1-S3) in the state EULER_STATE_NAMES (beta, gamma, alpha_dot, beta_dot, gamma_dot), the
+    spin a state, so that a start can fix it (:mod:`tippedisk_analysis.analysis.free_nutation`); observables
+    E_tot, friction_power (S4), z_S. rolling_only: the rolling disk (eps = 0 written into the expressions, as
+    :func:`.held_spin.rolling_system`), reversible under (beta, gamma, alpha_dot, beta_dot, gamma_dot) ->
+    (pi - beta, gamma, alpha_dot, beta_dot, -gamma_dot) and -> (beta, pi - gamma, alpha_dot, -beta_dot,
+    gamma_dot)."""
+    variables = hy.make_vars(*EULER_STATE_NAMES)
+    beta, gamma = variables[:2]
+    trig = Trig(0.0 * beta, 1.0 + 0.0 * beta, hy.sin(beta), hy.cos(beta), hy.sin(gamma), hy.cos(gamma))
+    flow = slow_dynamics(variables, trig, pars={**P, "eps": 0.0} if rolling_only else P, euler_rates=True)
+    slow = flow.slow
+    observables = {"E_tot": slow.energies["E_kin"] + slow.energies["E_pot"], "friction_power": slow.friction_power,
+                   "z_S": slow.z_S}
+    defaults = dict(zip(ode.PARAMETER_NAMES, ode.parameter_vector()))
+    name = "tippedisk_rolling_euler" if rolling_only else "tippedisk_slow_flow_euler"
+    return System(name, variables, flow.rhs, {n: defaults[n] for n in PARAMETER_NAMES}, state_names=EULER_STATE_NAMES,
+                  state_scale=(1.0, 1.0, 40.0, 10.0, 10.0),
+                  observables={k: (v, OBSERVABLE_UNITS[k]) for k, v in observables.items()}, n_trivial=2,
+                  units={**EULER_STATE_UNITS, **{k: PARAMETER_UNITS[k] for k in PARAMETER_NAMES}}, time_units="s",
+                  compact_mode=True, strict_parameters=False,
+                  description="the rolling tippedisk (eps = 0) in Euler rates" if rolling_only else
+                  "the slow flow of the smooth tippedisk in Euler rates")
 
 
 def smooth_state(states, pars=None) -> np.ndarray:
