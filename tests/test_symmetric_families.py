@@ -206,3 +206,23 @@ def test_the_drift_of_a_family_of_families_is_the_averaged_flow():
         assert found["along_drift"]["z"] / found["period"] == pytest.approx(rate_z, rel=1e-4, abs=1e-6)
     with pytest.raises(ParameterError, match="along"):
         dy.drift_at(system, shooting, 1.0, None, {"p": 0.0, "mu": mu}, "p", along=("x",))
+
+
+def test_the_transverse_drift_is_the_averaged_growth_of_the_oscillation_about_the_orbit():
+    """x'' + x = p (1 - x^2) x' carries y'' + nu^2 y = p (c - x^2) y': about each orbit y = 0 of amplitude A the
+    y-oscillation is transverse, with multipliers exp(+-2 pi i nu) at p = 0, and averaging gives it the growth rate
+    p (c - A^2/2) / 2; the amplitude's drift is van der Pol's, p A/2 (1 - A^2/4)."""
+    xs, vs, ys, ws = hy.make_vars("x", "v", "y", "w")
+    nu, c = 1.37, 0.5
+    system = dy.System("vdp_carrying", [xs, vs, ys, ws],
+                       [vs, -xs + hy.par[0] * (1.0 - xs**2) * vs, ws, -nu**2 * ys + hy.par[0] * (c - xs**2) * ws],
+                       parameters={"p": 0.0})
+    shooting = Shooting(fixed={"v": 0.0, "w": 0.0}, vary="x", free="y", condition="y",
+                        section=dy.Event("crossed", xs, "negative"), period_factor=4.0)
+    for amplitude in (0.8, 1.5):
+        found = dy.drift_at(system, shooting, amplitude, 0.0, {"p": 0.0}, "p", transverse=True)
+        period = 2 * math.pi
+        assert found["valid"] and found["period"] == pytest.approx(period, rel=1e-10)
+        assert found["drift"] / period == pytest.approx(amplitude / 2 * (1 - amplitude**2 / 4), rel=1e-4)
+        growth = np.array(found["transverse_drift"]) / period
+        assert growth == pytest.approx([(c - amplitude**2 / 2) / 2] * 2, abs=1e-7)  # measured: 4e-9

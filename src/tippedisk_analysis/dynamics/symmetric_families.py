@@ -25,6 +25,11 @@ Melnikov function); its sign says on which side starts drift. Where another eige
 resonance of the transverse oscillation with the family, a fold) l is not defined, and where one passes 1
 between two members the family branches (the drift may have a pole there): such orbits are flagged
 (``drift_valid`` = 0, with ``resonance_gap`` and ``branch_point``).
+
+:func:`drift_at` also takes families of families (``along``: fixed start values that label the family too; l
+becomes the left null space of DP0 - I, one vector per label) and the growth of the oscillation about the orbit
+(``transverse``: the first-order change of the transverse multipliers' modulus, with the perturbed map
+differentiated at its guiding point x0 + p z, (DP0 - I) z = (the drift along the family) - dP/dp).
 """
 
 from __future__ import annotations
@@ -46,7 +51,7 @@ from .continuation_interface import Options, Problem
 from .datasets import flag_attrs, mixed_units, state_coordinates
 from .system import Event, System
 
-__all__ = ["Shooting", "Shooter", "symmetric_family", "family_drift", "drift_at"]
+__all__ = ["Shooting", "Shooter", "symmetric_family", "family_drift", "drift_at", "period_map"]
 
 TOL = 1e-13  # Taylor tolerance of the shooting runs
 FD_STEP = 1e-7  # relative finite-difference step of the shooting Jacobian and of DP0
@@ -320,51 +325,103 @@ def symmetric_family(system: System, shooting: Shooting, start: tuple, bounds: t
     return ds
 
 
-def _orbit_drift(shooters: tuple, x0: np.ndarray, period: float, amplitude: float, free, pars: np.ndarray,
-                 index: int, values: tuple, along: tuple = ()) -> dict:
-    """One orbit's drift (at p -> 0, extrapolated from ``values``) of the amplitude and of the fixed start values
-    named in ``along`` (a family of families: an array of 1 + len(along)), the two measured values of each, the
-    resonance gap, the product of (mu - 1) over the transverse multipliers (its sign change between members marks
-    a branch point) and whether the period map has as many eigenvalues 1 as the family has parameters (``one``)."""
-    shooter, base_shooter = shooters
-    n, k = len(x0), 1 + len(along)
-    out = {"drift": np.full(k, math.nan), "measured": np.full((k, 2), math.nan), "gap": 0.0, "transverse": 0.0,
-           "one": True}
-    skip = period * (1.0 - 0.5 / shooter.shooting.period_factor)  # the next crossing is the one a period on
-    base = base_shooter.run(x0, pars, skip)
-    tangents = base_shooter.tangents(amplitude, free, pars, along)
-    if base is None or tangents is None:
-        return out
+def period_map(shooter: Shooter, x0: np.ndarray, pars: np.ndarray, skip: float):
+    """(the crossing after ``skip`` [time units] from ``x0``, i.e. a period on for skip = (1 - 1 / (2 period_factor))
+    periods, and the derivative of that map at ``x0`` by forward differences), or None where a run fails."""
+    n = len(x0)
+    base = shooter.run(x0, pars, skip)
+    if base is None:
+        return None
     D = np.zeros((n, n))
     for j in range(n):
         h = FD_STEP * max(1.0, abs(x0[j]))
-        hit = base_shooter.run(x0 + h * np.eye(n)[j], pars, skip)
+        hit = shooter.run(x0 + h * np.eye(n)[j], pars, skip)
         if hit is None:
-            return out
+            return None
         D[:, j] = (hit[0] - base[0]) / h
-    w = np.linalg.eigvals(D)
-    order = np.argsort(np.abs(w - 1.0))
-    if abs(w[order[k - 1]] - 1.0) > ONE_TOL:  # two multipliers near 1 split (a fold or a resonance): no l
+    return base, D
+
+
+def _orbit_drift(shooters: tuple, x0: np.ndarray, period: float, amplitude: float, free, pars: np.ndarray,
+                 index: int, values: tuple, along: tuple = (), transverse: bool = False) -> dict:
+    """One orbit's drift (at p -> 0, extrapolated from ``values``) of the amplitude and of the fixed start values
+    named in ``along`` (a family of families: an array of 1 + len(along)), the two measured values of each, the
+    resonance gap, the product of (mu - 1) over the transverse multipliers (its sign change between members marks
+    a branch point) and whether the period map has as many eigenvalues 1 as the family has parameters (``one``).
+    transverse: also d ln|mu| / dp per revolution of each transverse multiplier (``transverse_drift``, ordered by
+    |arg mu|; NaN where a perturbed map cannot be run): whether the perturbation makes the transverse oscillation
+    grow or decay."""
+    shooter, base_shooter = shooters
+    n, k = len(x0), 1 + len(along)
+    out = {"drift": np.full(k, math.nan), "measured": np.full((k, 2), math.nan), "gap": 0.0, "transverse": 0.0,
+           "one": True, "transverse_drift": np.full(max(n - k - 1, 0), math.nan), "transverse_check": math.inf}
+    skip = period * (1.0 - 0.5 / shooter.shooting.period_factor)  # the next crossing is the one a period on
+    mapped = period_map(base_shooter, x0, pars, skip)
+    tangents = base_shooter.tangents(amplitude, free, pars, along)
+    if mapped is None or tangents is None:
+        return out
+    base, D = mapped
+    others = _transverse_multipliers(D, k)
+    if others is None:  # two multipliers near 1 split (a fold or a resonance): no l
         return {**out, "one": False}
-    rest = w[order[k:]]
-    others = np.delete(rest, np.argmin(np.abs(rest)))  # without the flow's eigenvalue 0
     out["gap"] = float(np.min(np.abs(others - 1.0))) if others.size else math.inf
     out["transverse"] = float(np.prod(others - 1.0).real) if others.size else 1.0
     ell = np.linalg.svd(D - np.eye(n))[0][:, -k:]  # the left null space of DP0 - I: l^T DP0 = l^T
     projected = ell.T @ tangents
     if not np.all(np.isfinite(projected)) or np.linalg.cond(projected) > 1e12:
         return out
-    measured = []
+    measured, guides = [], []
     for value in values:
         perturbed = pars.copy()
         perturbed[index] = value
         hit = shooter.run(x0, perturbed, skip)
-        measured.append(np.full(k, math.nan) if hit is None else
-                        np.linalg.solve(projected, ell.T @ (hit[0] - base[0]) / value))
+        if hit is None:
+            measured.append(np.full(k, math.nan))
+            continue
+        change = (hit[0] - base[0]) / value
+        measured.append(np.linalg.solve(projected, ell.T @ change))
+        # the perturbed map's guiding point x0 + p z: P_p(x0 + p z) = x0 + p z + p (drift along the family)
+        guides.append(np.linalg.lstsq(D - np.eye(n), tangents @ measured[-1] - change, rcond=None)[0])
     (v1, v2), (d1, d2) = values, measured
     out["measured"] = np.column_stack([d1, d2])
     out["drift"] = (v2 * d1 - v1 * d2) / (v2 - v1)  # linear in p: the value at p = 0
+    if transverse and others.size and len(guides) == 2:
+        out["transverse_drift"], out["transverse_check"] = _transverse_drift(shooter, x0, guides, pars, index, values,
+                                                                             skip, others)
     return out
+
+
+def _transverse_multipliers(D: np.ndarray, k: int) -> np.ndarray | None:
+    """The period map's multipliers other than its k eigenvalues 1 (the family's) and the flow's 0, ordered by
+    |arg mu|; None unless k lie within ONE_TOL of 1."""
+    w = np.linalg.eigvals(D)
+    order = np.argsort(np.abs(w - 1.0))
+    if abs(w[order[k - 1]] - 1.0) > ONE_TOL:
+        return None
+    rest = w[order[k:]]
+    others = np.delete(rest, np.argmin(np.abs(rest)))
+    return others[np.argsort(np.abs(np.angle(others)), kind="stable")]
+
+
+def _transverse_drift(shooter, x0, guides, pars, index, values, skip, unperturbed) -> tuple[np.ndarray, float]:
+    """d ln|mu| / dp per revolution of the transverse multipliers ``unperturbed`` (p = 0), each matched to the
+    nearest multiplier of the perturbed map at both ``values`` and extrapolated linearly to p = 0. The perturbed
+    map is differentiated at its guiding point x0 + p z (``guides``: z), where a start stays next to the family:
+    its multipliers there, not at x0, are those the drifting start sees (where the transverse block depends on the
+    state, the two differ at first order in p)."""
+    rates = []
+    for value, guide in zip(values, guides):
+        perturbed = pars.copy()
+        perturbed[index] = value
+        mapped = period_map(shooter, x0 + value * guide, perturbed, skip)
+        moved = None if mapped is None else np.linalg.eigvals(mapped[1])
+        if moved is None:
+            return np.full(unperturbed.size, math.nan), math.inf
+        nearest = moved[[int(np.argmin(np.abs(moved - mu))) for mu in unperturbed]]
+        rates.append((np.log(np.abs(nearest)) - np.log(np.abs(unperturbed))) / value)
+    (v1, v2), (r1, r2) = values, rates
+    check = float(np.max(np.abs(r1 - r2)) / max(float(np.max(np.abs(r2))), 1e-300))
+    return (v2 * r1 - v1 * r2) / (v2 - v1), check
 
 
 def _drift_setup(system, shooting, pars_by_name, parameter, values, unperturbed):
@@ -387,7 +444,8 @@ def _drift_setup(system, shooting, pars_by_name, parameter, values, unperturbed)
 
 
 def drift_at(system: System, shooting: Shooting, amplitude: float, free_guess, pars, parameter: str,
-             values: tuple = (1e-5, 2e-5), unperturbed: System | None = None, along: tuple = ()) -> dict:
+             values: tuple = (1e-5, 2e-5), unperturbed: System | None = None, along: tuple = (),
+             transverse: bool = False) -> dict:
     """The drift (per revolution per unit ``parameter``, extrapolated to 0) of the member of the family with
     ``amplitude`` (free coordinate solved from ``free_guess``) at ``pars`` (``parameter`` 0): {"drift",
     "period", "check", "valid", "free"} (valid: an eigenvalue 1, no resonance; check: the two values' relative
@@ -397,7 +455,11 @@ def drift_at(system: System, shooting: Shooting, amplitude: float, free_guess, p
     ``along``: names of ``fixed`` start coordinates that label the family too (a family of families, e.g. a
     conserved quantity's value or a state every member starts with): their drift per revolution comes as
     ``along_drift`` {name: value}, from the period map's left null space of the dimension 1 + len(along); the
-    check then compares the two measured drift vectors, each component in units of its state scale."""
+    check then compares the two measured drift vectors, each component in units of its state scale.
+    ``transverse``: also ``transverse_drift``, d ln|mu| / d(parameter) per revolution of each transverse
+    multiplier mu (ordered by |arg mu|; a pair's two are equal): per unit time, the growth rate per unit
+    parameter of the oscillation about the orbit (its Floquet exponent's real part); ``transverse_check``, the
+    two values' relative difference."""
     try:
         vector = system.with_pars(None, **pars) if isinstance(pars, dict) else system.with_pars(pars)
     except (TypeError, ValueError):
@@ -416,7 +478,7 @@ def drift_at(system: System, shooting: Shooting, amplitude: float, free_guess, p
     if hit is None:
         raise ParameterError(f"the member at {shooting.vary} = {amplitude:.6g} does not reach the section")
     period = shooting.period_factor * hit[1]
-    found = _orbit_drift(shooters, hit[0], period, amplitude, free, pars, index, values, tuple(along))
+    found = _orbit_drift(shooters, hit[0], period, amplitude, free, pars, index, values, tuple(along), transverse)
     scale = np.array([system.state_scale[system.state_index(name)] for name in (shooting.vary, *along)])
     d1, d2 = (found["measured"][:, j] / scale for j in (0, 1))
     check = float(np.linalg.norm(d1 - d2) / max(np.linalg.norm(d2), 1e-300))
@@ -425,6 +487,9 @@ def drift_at(system: System, shooting: Shooting, amplitude: float, free_guess, p
     out = {"drift": float(drift[0]), "period": period, "check": check, "valid": bool(valid), "free": free}
     if along:
         out["along_drift"] = dict(zip(along, map(float, drift[1:])))
+    if transverse:
+        out["transverse_drift"] = [float(v) for v in found["transverse_drift"]]
+        out["transverse_check"] = found["transverse_check"]
     return out
 
 

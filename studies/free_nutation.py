@@ -1,0 +1,145 @@
+"""The free disk's nutation averaged in amplitude and spin, (N1), with the precession's growth, (N2), against ODE
+Model 1 from Table 3 (docs/inversion.md).
+
+    tippedisk study free_nutation [--output-dir DIR] [--quick]
+
+Computes (N1) and sigma (analysis/free_nutation.py) on a grid of the nutation amplitude a and the spin Omega0 at
+the turning point (Tables 1-2 disk), runs ODE Model 1 from Table 3 at eps = 0.01 m/s with two initial spins (one
+that inverts, one that does not) and reads off each run's a and Omega0 at its turning points and the precession's
+amplitude rho at its top crossings, and integrates (N1) from the inverting run's turning point nearest eps t =
+0.12 m. Writes free_nutation_field.nc (the grid) and free_nutation.png.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import sys
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+import xarray as xr
+from tippedisk_studies._common import finish, prepare
+
+import tippedisk_analysis as td
+from tippedisk_analysis.analysis import free_nutation as fn
+from tippedisk_analysis.analysis import inversion
+from tippedisk_analysis.models import reduced
+
+AMPLITUDES = np.round(np.arange(0.1, 2.25, 0.1), 2)  # rad
+SPINS = np.round(np.arange(29.6, 33.01, 0.1), 2)  # rad/s
+QUICK = (np.round(np.arange(0.2, 2.1, 0.45), 2), np.round(np.arange(29.8, 33.0, 0.8), 2))
+RUN_EPS = 0.01  # m/s
+RUN_SPINS = (33.4, 33.7)  # rad/s: below and above the threshold of Table 3's start (33.6534 at eps 0.01)
+RUN_SLOW_TIME = 0.42  # m: eps t of each run
+PATH_START = 0.12  # m: (N1) starts from the inverting run's turning point nearest this eps t
+RHO_START = 0.05  # m: (N2) starts from the inverting run's rho here
+CRITERION_AMPLITUDE = 0.71  # rad: on the family, beta at the top lies within 0.145 rad of upright below this
+
+
+def full_run(spin: float) -> dict:
+    """ODE Model 1 from Table 3 at ``spin``: a and Omega0 at the turning points, rho at the top crossings (where
+    a < 2 rad, inside the family), and the highest z_S [in units of e above r]."""
+    setup = inversion.with_eps(None, RUN_EPS)
+    model, pars = reduced.system(), inversion.parameters("smooth", setup)
+    times = np.arange(0.0, RUN_SLOW_TIME / RUN_EPS, 0.0005)
+    ta = copy.deepcopy(model.taylor(1e-12))
+    ta.time = 0.0
+    ta.state[:] = inversion.start_state("smooth", spin, setup, -0.5 * math.pi + 0.1)
+    ta.pars[:] = pars[: len(ta.pars)]
+    states = ta.propagate_grid(times)[5]
+    x = fn.euler_states(states)
+    turns = fn.turning_points(times, x[:, 1], x[:, 2])
+    crossed, tops = fn.top_crossings(times, x)
+    rho = []
+    for t, state in zip(crossed, tops):
+        before = turns["time"] < t
+        a, spin0 = (turns["amplitude"][before][-1], turns["spin"][before][-1]) if before.any() else (9.0, 0.0)
+        if a < 2.0:  # inside the family
+            rho.append((t * RUN_EPS, fn.precession_amplitude(state, a, spin0), a, spin0))
+    height = (model.observe(states.T, pars)["z_S"].max() - setup.disk.r) / setup.disk.e
+    return {"spin": spin, "turns": turns, "rho": np.array(rho), "height": float(height)}
+
+
+def rho_from_sigma(rows: np.ndarray, start: float) -> tuple[np.ndarray, np.ndarray]:
+    """(eps t, rho) from (N2) along a run's own labels (``rows`` of :func:`full_run`), from its rho at ``start``."""
+    rows = rows[rows[:, 0] >= start]
+    sigma = np.array([fn.rates(a, spin0)["precession_rate"] for _t, _rho, a, spin0 in rows])
+    growth = np.concatenate([[0.0], np.cumsum(0.5 * (sigma[1:] + sigma[:-1]) * np.diff(rows[:, 0]))])
+    return rows[:, 0], np.median(rows[:3, 1]) * np.exp(growth)
+
+
+def figure(field: xr.Dataset, runs: list, path_n1: xr.Dataset, start: tuple, predicted: tuple, out: Path) -> None:
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(13, 5), gridspec_kw={"wspace": 0.25})
+    spins, a = field.spin.values, field.amplitude.values
+    checked = field.valid.values.T == 1
+    F, G = (np.where(checked, v.values.T, np.nan) for v in (field.amplitude_rate, field.spin_rate))
+    ax.contourf(spins, a, np.sign(F), levels=[-2, 0, 2], colors=["#e8f0ff", "#ffe8e0"])
+    ax.contour(spins, a, F, levels=[0.0], colors="C3", linewidths=1.5)
+    ax.contour(spins, a, G, levels=[0.0], colors="C0", linewidths=1.0, linestyles="--")
+    ax.streamplot(spins, a, np.nan_to_num(G), np.nan_to_num(F), color="0.6", density=0.9, linewidth=0.6,
+                  arrowsize=0.7)
+    for run, color in zip(runs, ("C1", "C2")):
+        turns = run["turns"]
+        inside = turns["amplitude"] < 2.2
+        ax.plot(turns["spin"][inside], turns["amplitude"][inside], ".", ms=2.5, color=color,
+                label=f"ODE Model 1, {run['spin']:g} rad/s (highest z_S = r + {run['height']:.3f} e)")
+    ax.plot(path_n1.spin, path_n1.amplitude, "k-", lw=1.5, label="(N1) from the 33.7 rad/s run at eps t = 0.12 m")
+    ax.plot(*start[::-1], "ko", ms=4)
+    ax.axhline(CRITERION_AMPLITUDE, color="0.3", lw=0.6, ls=":")
+    ax.text(spins[-1] - 0.05, CRITERION_AMPLITUDE + 0.02, "the criterion without a precession", ha="right",
+            fontsize=7, color="0.3")
+    ax.set(xlabel="spin at the turning point Omega0 [rad/s]", ylabel="nutation amplitude a [rad]",
+           xlim=(spins[0], spins[-1]), ylim=(0.0, a[-1]),
+           title="(N1): F = 0 (red; nutation grows in the red region), G = 0 (blue, dashed)")
+    ax.legend(fontsize=7, loc="upper left")
+    for run, color in zip(runs, ("C1", "C2")):
+        rows = run["rho"]
+        bx.semilogy(rows[:, 0], rows[:, 1], ".", ms=3, color=color, label=f"rho, ODE Model 1 at {run['spin']:g} rad/s")
+    bx.semilogy(*predicted, "k-", lw=1.2, label="(N2) along the 33.7 rad/s run's labels, from its rho at 0.05 m")
+    bx.set(xlabel="eps t [m]", ylabel="precession amplitude rho [rad]", title="the precession about the family")
+    bx.legend(fontsize=7)
+    finish(fig, (ax, bx), out, fontsize=7)
+
+
+def main(output_dir: str = "output", quick: bool = False) -> Path:
+    out = prepare(output_dir)
+    amplitudes, spins = QUICK if quick else (AMPLITUDES, SPINS)
+    field = fn.field(amplitudes, spins)
+    sigma = field.precession_rate.values[field.valid.values == 1]
+    print(f"(N1) field: {field.attrs['message']}; sigma {sigma.min():.3f} to {sigma.max():.3f} /m, percentiles 1, 50, "
+          f"99: {np.percentile(sigma, [1, 50, 99]).round(3)}", flush=True)
+    runs = [full_run(spin) for spin in RUN_SPINS]
+    inverting = runs[-1]["turns"]
+    k = int(np.argmin(np.abs(inverting["time"] * RUN_EPS - PATH_START)))
+    start = (float(inverting["amplitude"][k]), float(inverting["spin"][k]))
+    path_n1 = fn.averaged_path(*start, RUN_SLOW_TIME - inverting["time"][k] * RUN_EPS, samples=60)
+    print(f"(N1) from a = {start[0]:.4f} rad, Omega0 = {start[1]:.4f} rad/s: {path_n1.attrs['status']}, "
+          f"{path_n1.attrs['message']}", flush=True)
+    for run in runs:
+        turns = run["turns"]
+        for tau in (0.15, 0.2, 0.25, 0.3, 0.35, 0.4):
+            j = int(np.argmin(np.abs(turns["time"] * RUN_EPS - tau)))
+            line = (f"  {run['spin']:g} rad/s, eps t {turns['time'][j] * RUN_EPS:.3f} m: "
+                    f"a {turns['amplitude'][j]:.3f} rad, Omega0 {turns['spin'][j]:.3f} rad/s")
+            if run is runs[-1]:
+                s = turns["time"][j] * RUN_EPS - inverting["time"][k] * RUN_EPS
+                line += (f"; (N1): a {np.interp(s, path_n1.slow_time, path_n1.amplitude):.3f} rad, Omega0 "
+                         f"{np.interp(s, path_n1.slow_time, path_n1.spin):.3f} rad/s")
+            print(line, flush=True)
+    field.attrs["run_spins"] = list(RUN_SPINS)
+    field.attrs["run_heights"] = [run["height"] for run in runs]
+    saved = td.save(field, out / "free_nutation_field.nc")
+    predicted = rho_from_sigma(runs[-1]["rho"], RHO_START)
+    measured = runs[-1]["rho"][runs[-1]["rho"][:, 0] >= RHO_START]
+    end = int(np.argmin(np.abs(measured[:, 0] - predicted[0][-1])))
+    print(f"rho of the {runs[-1]['spin']:g} rad/s run: {predicted[1][0]:.4f} rad at {RHO_START:g} m -> "
+          f"{measured[end, 1]:.4f} rad at {measured[end, 0]:.3f} m; (N2) along its labels: {predicted[1][-1]:.4f} rad",
+          flush=True)
+    figure(field, runs, path_n1, start, predicted, saved.with_name("free_nutation.png"))
+    return saved
+
+
+if __name__ == "__main__":
+    main(*sys.argv[1:2])
