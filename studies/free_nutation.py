@@ -40,7 +40,8 @@ CRITERION_AMPLITUDE = 0.71  # rad: on the family, beta at the top lies within 0.
 
 def full_run(spin: float) -> dict:
     """ODE Model 1 from Table 3 at ``spin``: a and Omega0 at the turning points, rho at the top crossings (where
-    a < 2 rad, inside the family), and the highest z_S [in units of e above r]."""
+    the last turning point has a member on the family's first branch), and the highest z_S [in units of e above
+    r]."""
     setup = inversion.with_eps(None, RUN_EPS)
     model, pars = reduced.system(), inversion.parameters("smooth", setup)
     times = np.arange(0.0, RUN_SLOW_TIME / RUN_EPS, 0.0005)
@@ -55,9 +56,13 @@ def full_run(spin: float) -> dict:
     rho = []
     for t, state in zip(crossed, tops):
         before = turns["time"] < t
-        a, spin0 = (turns["amplitude"][before][-1], turns["spin"][before][-1]) if before.any() else (9.0, 0.0)
-        if a < 2.0:  # inside the family
+        if not before.any():
+            continue
+        a, spin0 = turns["amplitude"][before][-1], turns["spin"][before][-1]
+        try:
             rho.append((t * RUN_EPS, fn.precession_amplitude(state, a, spin0), a, spin0))
+        except fn.NoMember:  # the run lies beyond the family's first branch there (before it lands on it)
+            continue
     height = (model.observe(states.T, pars)["z_S"].max() - setup.disk.r) / setup.disk.e
     return {"spin": spin, "turns": turns, "rho": np.array(rho), "height": float(height)}
 

@@ -14,7 +14,8 @@ from tippedisk_analysis.analysis import critical_spin as cs
 from tippedisk_analysis.analysis import free_nutation as fn
 from tippedisk_analysis.analysis import inversion
 from tippedisk_analysis.errors import ParameterError
-from tippedisk_analysis.dynamics.symmetric_families import Shooter, period_map
+from tippedisk_analysis.dynamics.melnikov import period_map
+from tippedisk_analysis.dynamics.symmetric_families import Shooter
 from tippedisk_analysis.models import reduced, slow_flow
 
 
@@ -71,15 +72,44 @@ def test_the_averaged_path_follows_the_slow_flow_started_on_the_family():
         assert 0.3 < second / first < 0.7
 
 
+def test_members_come_from_the_first_branch_and_none_past_its_fold():
+    """At 32.2 rad/s the family's first branch folds at a = 2.1053 rad (traced at 32.25 rad/s); at a = 2.2 rad
+    another branch has members (beta_dot 2.24 and 2.95 rad/s), which a guess alone could land on."""
+    a, _beta_dot = fn.first_branch(32.25)
+    assert a[-1] == pytest.approx(2.105, abs=2e-3)
+    with pytest.raises(fn.NoMember, match="folds"):
+        fn.rates(2.2, 32.2)
+    assert fn.rates(2.0, 32.2)["valid"]
+
+
+def test_an_averaged_path_that_settles_keeps_what_it_computed():
+    """Above omega_c a small nutation decays onto the inverted spins (a = 0, a line of equilibria of (N1)), where
+    the drift's checks end: the path says so and keeps its samples."""
+    path = fn.averaged_path(0.05, 32.0, 4.0)
+    assert path.attrs["status"] == "settled"
+    assert path.sizes["slow_time"] > 2 and np.all(np.diff(path.amplitude.values) < 0)
+    assert path.amplitude.values[-1] < 0.03 and abs(path.spin.values[-1] - 32.0) < 0.01
+
+
 def test_bad_requests_are_refused_in_one_line():
     with pytest.raises(ParameterError, match="amplitude"):
         fn.rates(3.5, 30.0)
     with pytest.raises(ParameterError, match="spin"):
         fn.rates(1.0, -30.0)
+    with pytest.raises(fn.NoMember, match="centre"):
+        fn.rates(0.5, 5.0)
     with pytest.raises(ParameterError, match="spins"):
         fn.field([0.1, 0.2], [31.0])
+    with pytest.raises(ParameterError, match="setup"):
+        fn.field([0.1, 0.2], [31.0, 31.1], setup=3)
     with pytest.raises(ParameterError, match="slow_time"):
         fn.averaged_path(1.0, 31.0, 0.0)
+    with pytest.raises(ParameterError, match="samples"):
+        fn.averaged_path(1.0, 31.0, 0.01, samples=2.5)
+    with pytest.raises(fn.NoMember):
+        fn.averaged_path(3.0, 31.0, 0.01)
+    with pytest.raises(ParameterError, match="state"):
+        fn.precession_amplitude([1.0, 2.0, 3.0], 1.0, 31.0)
 
 
 @pytest.mark.parametrize("amplitude, spin", [(1.2, 32.0), (0.6, 31.0)])

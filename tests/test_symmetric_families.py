@@ -16,7 +16,8 @@ from scipy.integrate import quad
 from scipy.special import ellipk
 
 from tippedisk_analysis import dynamics as dy
-from tippedisk_analysis.dynamics.symmetric_families import Shooting, family_drift, symmetric_family
+from tippedisk_analysis.dynamics.melnikov import family_drift
+from tippedisk_analysis.dynamics.symmetric_families import Shooting, symmetric_family
 from tippedisk_analysis.errors import ParameterError
 
 x, v = hy.make_vars("x", "v")
@@ -206,6 +207,11 @@ def test_the_drift_of_a_family_of_families_is_the_averaged_flow():
         assert found["along_drift"]["z"] / found["period"] == pytest.approx(rate_z, rel=1e-4, abs=1e-6)
     with pytest.raises(ParameterError, match="along"):
         dy.drift_at(system, shooting, 1.0, None, {"p": 0.0, "mu": mu}, "p", along=("x",))
+    unlabelled = dy.drift_at(system, shooting, 1.0, None, {"p": 0.0, "mu": mu}, "p")  # z not named: two 1s
+    assert not unlabelled["valid"] and "along" in unlabelled["reason"]
+    twice = Shooting(fixed=shooting.fixed, vary="x", section=shooting.section, period_factor=8.0)
+    with pytest.raises(ParameterError, match="1/2"):  # a wrong period_factor is refused as in symmetric_family
+        dy.drift_at(system, twice, 1.0, None, {"p": 0.0, "mu": mu}, "p", along=("z",))
 
 
 def test_the_transverse_drift_is_the_averaged_growth_of_the_oscillation_about_the_orbit():

@@ -21,24 +21,34 @@ import numbers
 
 import numpy as np
 import xarray as xr
-from scipy.integrate import solve_ivp
+from scipy.integrate import RK45
 
 from .. import kinematics as kin
-from ..dynamics import Event, drift_at
+from ..dynamics import Event, Options, drift_at
 from ..dynamics.datasets import flag_attrs
-from ..dynamics.symmetric_families import Shooter, Shooting, period_map
+from ..dynamics.melnikov import period_map
+from ..dynamics.symmetric_families import Shooter, Shooting, symmetric_family
 from ..errors import ParameterError
 from ..models import slow_flow
 from ..parameters import Setup
 from ..results import make_attrs
 from . import inversion
 
-__all__ = ["shooting", "rates", "field", "averaged_path", "member_orbit", "precession_amplitude", "top_crossings",
-           "turning_points", "euler_states"]
+__all__ = ["NoMember", "shooting", "first_branch", "rates", "field", "averaged_path", "member_orbit",
+           "precession_amplitude", "top_crossings", "turning_points", "euler_states"]
 
 EPS_PROBES = (1e-4, 2e-4)  # m/s: the two values of eps at which the drift is measured (they must agree)
-DRIFT_AGREEMENT = 1e-2  # relative, as dynamics.symmetric_families
+DRIFT_AGREEMENT = 1e-2  # relative, as dynamics.melnikov
+START_AMPLITUDE = 0.01  # rad: the family's first member, and the smallest amplitude asked for
+BRANCH_SPIN_STEP = 0.25  # rad/s: the family's first branch is traced at spins on this grid (the nearest serves)
+BRANCH_TOL = 0.05  # rad/s: a member's beta_dot must lie this close to the traced branch's (else another branch)
+BRANCH_STEP = 0.15  # the largest continuation step along the branch (larger ones jumped past folds at 32.5 rad/s)
+SETTLED = 0.02  # rad: an averaged path whose nutation decays below this has reached the inverted spins (a = 0)
 _gamma = slow_flow.euler_system(True).variables[1]
+
+
+class NoMember(ParameterError):
+    """No member of the nutation family's first branch at the amplitude and spin asked for."""
 
 
 def shooting(spin: float) -> Shooting:
@@ -62,25 +72,72 @@ def _positive(value, what: str) -> float:
     return float(value)
 
 
-def rates(amplitude: float, spin: float, setup: Setup | None = None, beta_dot_guess: float | None = None) -> dict:
+@functools.lru_cache(maxsize=64)
+def first_branch(spin: float, setup: Setup | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(a [rad], beta_dot at the start [rad/s]) along the family's first branch at ``spin`` [rad/s]: traced by
+    continuation from START_AMPLITUDE up to the family's first fold in the amplitude (past it the members belong
+    to other branches)."""
+    system = slow_flow.euler_system(True)
+    pars = system.with_pars(None, **_pars(setup))
+    spin = _positive(spin, "spin")
+    w = np.linalg.eigvals(system.jacobian(np.array([0.5 * math.pi, 0.5 * math.pi, spin, 0.0, 0.0]), pars))
+    if np.sum(w.imag > 1e-9) != 2 or np.abs(w.real).max() > 1e-9 * np.abs(w).max():
+        raise NoMember(f"at {spin:g} rad/s the inverted spin is no centre of two pairs, so no nutation family "
+                       "surrounds it (for Tables 1-2 give a spin above 18.3 rad/s)")
+    plan = shooting(spin)
+    b0 = Shooter(system, plan).solve_free(0.5 * math.pi - START_AMPLITUDE, 1.2 * START_AMPLITUDE, pars)
+    if not math.isfinite(b0):
+        raise NoMember(f"no small nutation orbit found at {spin:g} rad/s")
+    ds = symmetric_family(system, plan, (0.5 * math.pi - START_AMPLITUDE, b0),
+                          (0.5 * math.pi - 3.1, 0.5 * math.pi - 0.5 * START_AMPLITUDE), pars,
+                          options=Options(ds=0.1, ds_max=BRANCH_STEP, max_points=150), free_bounds=(-0.5, 30.0),
+                          direction=-1)
+    a, beta_dot = 0.5 * math.pi - ds.amplitude.values, ds.start.sel(state="beta_dot").values
+    # the first fold (the core locates it), the first turn of a, or a jump to another branch, whichever first
+    ends = [*np.flatnonzero(ds.fold.values), *np.flatnonzero(np.diff(a) <= 0),
+            *np.flatnonzero(np.abs(np.diff(beta_dot)) > 2 * BRANCH_STEP), a.size - 1]
+    end = min(ends) + 1
+    return a[:end], beta_dot[:end]
+
+
+def _member(amplitude: float, spin: float, setup: Setup | None) -> float:
+    """beta_dot [rad/s] to start solving for the member (amplitude [rad], spin [rad/s]) on the first branch."""
+    key = round(round(spin / BRANCH_SPIN_STEP) * BRANCH_SPIN_STEP, 6)
+    a, beta_dot = first_branch(key, setup)
+    if not START_AMPLITUDE <= amplitude <= a[-1]:
+        raise NoMember(f"a = {amplitude:g} rad: at {key:g} rad/s the nutation family's first branch spans "
+                       f"{START_AMPLITUDE:g}-{a[-1]:.4f} rad (it folds there)")
+    return float(np.interp(amplitude, a, beta_dot))
+
+
+def rates(amplitude: float, spin: float, setup: Setup | None = None) -> dict:
     """(N1) at the member with amplitude a [rad] and spin Omega0 [rad/s] at its turning point: ``amplitude_rate``
     F [rad/m], ``spin_rate`` G [rad s-1 m-1], ``precession_rate`` sigma [1/m] (N2), ``period`` [s], ``beta_dot``
-    at the start [rad/s], ``check`` (the
-    two eps probes' relative difference) and ``valid`` (the period map has a double eigenvalue 1, no resonance,
-    the probes agree)."""
+    at the start [rad/s], ``check`` (the two eps probes' relative difference), ``valid`` (the period map has a
+    double eigenvalue 1, no resonance, the probes agree) and ``precession_valid`` (the same for sigma).
+    The member is the one on the family's first branch (:func:`first_branch`); NoMember (a ParameterError) where
+    none is."""
     a, spin = _positive(amplitude, "amplitude"), _positive(spin, "spin")
     if a >= math.pi:
         raise ParameterError(f"amplitude = {a!r} rad: give a value between 0 and pi")
     pars = _pars(setup)
-    guess = 1.2 * a if beta_dot_guess is None else float(beta_dot_guess)
+    guess = _member(a, spin, setup)
     plan = shooting(spin)
-    found = drift_at(slow_flow.euler_system(), plan, 0.5 * math.pi - a, guess, pars, "eps", EPS_PROBES,
-                     unperturbed=slow_flow.euler_system(True), along=("alpha_dot",), transverse=True)
+    try:
+        found = drift_at(slow_flow.euler_system(), plan, 0.5 * math.pi - a, guess, pars, "eps", EPS_PROBES,
+                         unperturbed=slow_flow.euler_system(True), along=("alpha_dot",), transverse=True)
+    except ParameterError as error:
+        raise NoMember(f"a = {a:g} rad, Omega0 = {spin:g} rad/s: {error}") from None
+    if abs(found["free"] - guess) > BRANCH_TOL:
+        raise NoMember(f"a = {a:g} rad, Omega0 = {spin:g} rad/s: the member found (beta_dot {found['free']:.4f} "
+                       f"rad/s) is not on the first branch (beta_dot {guess:.4f} rad/s there)")
     period = found["period"]
     return {"amplitude_rate": -found["drift"] / period, "spin_rate": found["along_drift"]["alpha_dot"] / period,
             "precession_rate": float(np.mean(found["transverse_drift"])) / period,
             "period": period, "beta_dot": found["free"], "check": found["check"],
             "valid": found["valid"] and found["check"] <= DRIFT_AGREEMENT,
+            "reason": found["reason"] or ("" if found["check"] <= DRIFT_AGREEMENT else
+                                          f"the two eps probes differ by {found['check']:.2g} (relative)"),
             "precession_valid": found["valid"] and found["transverse_check"] <= DRIFT_AGREEMENT}
 
 
@@ -91,8 +148,11 @@ def member_orbit(amplitude: float, spin: float, setup: Setup | None = None) -> t
     system = slow_flow.euler_system(True)
     pars = system.with_pars(None, **_pars(setup))
     shooter = Shooter(system, shooting(spin))
-    found = rates(amplitude, spin, setup)
-    hit = shooter.run(shooter.start(0.5 * math.pi - amplitude, found["beta_dot"]), pars)
+    gamma0 = 0.5 * math.pi - amplitude
+    beta_dot = shooter.solve_free(gamma0, _member(amplitude, spin, setup), pars)
+    hit = None if not math.isfinite(beta_dot) else shooter.run(shooter.start(gamma0, beta_dot), pars)
+    if hit is None:
+        raise NoMember(f"no member of the nutation family at a = {amplitude:g} rad, Omega0 = {spin:g} rad/s")
     top, period = hit[0], 4.0 * hit[1]
     _, D = period_map(shooter, top, pars, 0.875 * period)
     w, right = np.linalg.eig(D)
@@ -104,10 +164,15 @@ def member_orbit(amplitude: float, spin: float, setup: Setup | None = None) -> t
 def precession_amplitude(state, amplitude: float, spin: float, setup: Setup | None = None) -> float:
     """rho [rad]: the amplitude in beta of the precession about the member (amplitude [rad], spin [rad/s]) of a
     state (EULER_STATE_NAMES) at the top (gamma = pi/2, rising), from the left eigenvector l of the precession's
-    multiplier: 2 |l . (x - x_top)| |v_beta| / |l . v|, independent of the precession's phase, blind to the
+    multiplier: 2 abs(l . (x - x_top)) abs(v_beta) / abs(l . v), independent of the precession's phase, blind to the
     family's directions (l . t = 0 along them)."""
-    top, _period, v, left = member_orbit(round(float(amplitude), 4), round(float(spin), 4), setup)
-    return float(2.0 * abs(left @ (np.asarray(state, dtype=float) - top)) * abs(v[0]) / abs(left @ v))
+    x = np.asarray(state, dtype=float)
+    if x.shape != (len(slow_flow.EULER_STATE_NAMES),):
+        raise ParameterError(f"state: give one state ({', '.join(slow_flow.EULER_STATE_NAMES)}), not shape {x.shape}")
+    _pars(setup)
+    a, spin = _positive(amplitude, "amplitude"), _positive(spin, "spin")
+    top, _period, v, left = member_orbit(round(a, 4), round(spin, 4), setup)
+    return float(2.0 * abs(left @ (x - top)) * abs(v[0]) / abs(left @ v))
 
 
 def field(amplitudes, spins, setup: Setup | None = None) -> xr.Dataset:
@@ -121,17 +186,16 @@ def field(amplitudes, spins, setup: Setup | None = None) -> xr.Dataset:
             raise ParameterError(f"{name}: give at least two positive increasing values")
     if a[-1] >= math.pi:
         raise ParameterError("amplitudes: give values below pi")
+    _pars(setup)  # a bad setup is an error, not a family without members
     shape = (spins.size, a.size)
     out = {key: np.full(shape, np.nan) for key in ("amplitude_rate", "spin_rate", "precession_rate", "period")}
     valid = np.zeros(shape, np.int8)
     for i, spin in enumerate(spins):
-        guess = None
         for j, amplitude in enumerate(a):
             try:
-                found = rates(amplitude, spin, setup, guess)
-            except ParameterError:  # no member: past the fold of the family at this spin
+                found = rates(amplitude, spin, setup)
+            except NoMember:  # past the fold of the family's first branch at this spin
                 break
-            guess = found["beta_dot"]
             for key in out:
                 out[key][i, j] = found[key]
             valid[i, j] = found["valid"] and found["precession_valid"]
@@ -168,42 +232,59 @@ def field(amplitudes, spins, setup: Setup | None = None) -> xr.Dataset:
 def averaged_path(amplitude: float, spin: float, slow_time: float, setup: Setup | None = None,
                   samples: int = 50) -> xr.Dataset:
     """(N1) integrated from (a [rad], Omega0 [rad/s]) over the slow time eps t = ``slow_time`` [m]: ``amplitude``
-    and ``spin`` at ``samples`` slow times. Status ``completed``, or ``left_family`` where the path reaches a
-    point without a checked drift (past the fold, a resonance), which ends it."""
+    and ``spin`` at ``samples`` equally spaced slow times. Status ``completed``; ``settled`` where the nutation
+    has decayed below SETTLED (the path has reached the inverted spins, a line of equilibria of (N1)); or
+    ``left_family`` where it reaches a point without a checked drift (past the fold, a resonance). The path up
+    to where it ended is kept: the samples before, and the last point reached."""
     slow_time = _positive(slow_time, "slow_time")
-    state = {"guess": None, "where": None}
+    if isinstance(samples, bool) or not isinstance(samples, numbers.Integral) or samples < 2:
+        raise ParameterError(f"samples = {samples!r}: give an integer of at least 2")
+    y = np.array([_positive(amplitude, "amplitude"), _positive(spin, "spin")])
+    rates(*y, setup)  # a start without a member is an error, not a path that left the family
 
-    def rhs(_s, y):
+    def rhs(_s, z):
+        if z[0] < SETTLED:
+            raise _Ended("settled", f"the nutation decayed below {SETTLED:g} rad at Omega0 = {z[1]:.4f} rad/s")
         try:
-            found = rates(y[0], y[1], setup, state["guess"])
-        except ParameterError:
-            found = {"valid": False}
+            found = rates(z[0], z[1], setup)
+        except NoMember as error:
+            raise _Ended("left_family", str(error)) from None
         if not found["valid"]:
-            state["where"] = (float(y[0]), float(y[1]))
-            raise _LeftFamily
-        state["guess"] = found["beta_dot"]
+            raise _Ended("left_family", f"no checked drift at a = {z[0]:.4f} rad, Omega0 = {z[1]:.4f} rad/s: "
+                                        f"{found['reason']}")
         return [found["amplitude_rate"], found["spin_rate"]]
 
     times = np.linspace(0.0, slow_time, int(samples))
+    solver = RK45(rhs, 0.0, y, slow_time, rtol=1e-6, atol=1e-7)
+    steps = []  # the dense output of each completed step
     status, message = "completed", f"reached eps t = {slow_time:g} m"
-    try:
-        flow = solve_ivp(rhs, (0.0, slow_time), [_positive(amplitude, "amplitude"), _positive(spin, "spin")],
-                         dense_output=True, rtol=1e-6, atol=1e-7)
-        values = flow.sol(times)
-    except _LeftFamily:
-        a_end, spin_end = state["where"]
-        status = "left_family"
-        message = f"no checked drift at a = {a_end:.4f} rad, Omega0 = {spin_end:.4f} rad/s"
-        times, values = times[:1], np.array([[amplitude], [spin]])
+    while solver.status == "running":
+        try:
+            solver.step()
+        except _Ended as end:
+            status, message = end.args
+            break
+        if solver.status == "failed":
+            status, message = "left_family", f"the integrator failed at eps t = {solver.t:g} m"
+            break
+        steps.append(solver.dense_output())
+    reached = steps[-1].t_max if steps else 0.0
+    if status != "completed":  # the samples up to where it ended, and that point
+        times = np.append(times[times < reached], reached)
+    values = np.array([y if t == 0.0 else next(d for d in steps if d.t_min <= t <= d.t_max)(t) for t in times]).T
     ds = xr.Dataset({"amplitude": ("slow_time", values[0], {"units": "rad", "long_name": "nutation amplitude"}),
                      "spin": ("slow_time", values[1], {"units": "rad s-1", "long_name": "spin at the turning point"})},
-                    coords={"slow_time": ("slow_time", times, {"units": "m", "long_name": "eps t"})})
-    ds.attrs = make_attrs("free_nutation_path", {"amplitude": amplitude, "spin": spin}, status, message)
+                    coords={"slow_time": ("slow_time", times[: values.shape[1]], {"units": "m", "long_name":
+                                                                                   "eps t"})})
+    if status != "completed":
+        message += f"; the path is kept up to eps t = {reached:g} m (a = {values[0][-1]:.4f} rad)"
+    ds.attrs = make_attrs("free_nutation_path", {"amplitude": float(amplitude), "spin": float(spin),
+                                                 "slow_time": slow_time}, status, message)
     return ds
 
 
-class _LeftFamily(Exception):
-    """The averaged path reached a point without a checked drift."""
+class _Ended(Exception):
+    """The averaged path ended: (status, message)."""
 
 
 def euler_states(reduced_states) -> np.ndarray:
@@ -229,5 +310,7 @@ def turning_points(times, gamma, alpha_dot) -> dict:
     """(time [s], a [rad], Omega0 [rad/s]) at the turning points of gamma below the top (its local minima) of a
     run sampled at ``times``: where a run lies in the plane of (N1)."""
     g = np.asarray(gamma, dtype=float)
+    if not (np.ndim(times) == g.ndim == np.ndim(alpha_dot) == 1 and len(times) == g.size == len(alpha_dot)):
+        raise ParameterError("times, gamma, alpha_dot: give three sequences of the same length")
     k = np.flatnonzero((g[1:-1] < g[:-2]) & (g[1:-1] <= g[2:]) & (g[1:-1] < 0.5 * math.pi)) + 1
     return {"time": np.asarray(times)[k], "amplitude": 0.5 * math.pi - g[k], "spin": np.asarray(alpha_dot)[k]}

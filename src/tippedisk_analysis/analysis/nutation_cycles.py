@@ -34,7 +34,8 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from ..dynamics import Event, Options
-from ..dynamics.symmetric_families import Shooter, Shooting, drift_at, family_drift, symmetric_family
+from ..dynamics.melnikov import drift_at, family_drift
+from ..dynamics.symmetric_families import Shooter, Shooting, symmetric_family
 from ..errors import ParameterError
 from ..models import held_spin
 from ..parameters import Setup

@@ -25,8 +25,8 @@ _PUBLIC = {
     "PeriodicOrbit": "orbit_base", "orbit_problem": "orbit_branches", "continue_orbits": "orbit_branches",
     "hopf_start": "orbit_branches", "hopf_branch": "orbit_branches", "orbit_branch": "orbit_branches",
     "switch_period_doubling": "orbit_branches", "homoclinic_limit": "orbit_branches",
-    "Shooting": "symmetric_families", "symmetric_family": "symmetric_families", "family_drift": "symmetric_families",
-    "drift_at": "symmetric_families",
+    "Shooting": "symmetric_families", "symmetric_family": "symmetric_families", "family_drift": "melnikov",
+    "drift_at": "melnikov",
     "branch_dataset": "orbit_datasets", "orbits_dataset": "orbit_datasets", "orbit_from_dataset": "orbit_datasets",
     # Lyapunov exponents, Poincaré sections, attractors, sweeps
     "lyapunov_spectrum": "lyapunov", "poincare_section": "poincare", "basins": "attractors.system_problem",

@@ -91,9 +91,12 @@ def correct(problem: Problem, u_guess: np.ndarray, constraint: tuple[np.ndarray,
         F = residual(v)
         if not np.all(np.isfinite(F)):
             return None, it
-        if lin is None or not lin.reusable or rate > CHORD_RATE:
-            lin = problem.linearise(v * scale, scale, row)
-        step = lin.solve(-F)
+        try:
+            if lin is None or not lin.reusable or rate > CHORD_RATE:
+                lin = problem.linearise(v * scale, scale, row)
+            step = lin.solve(-F)
+        except np.linalg.LinAlgError:  # a linearisation with non-finite entries (e.g. a run that failed)
+            return None, it
         if not np.all(np.isfinite(step)):
             return None, it
         v = problem.project((v + step) * scale) / scale
