@@ -74,12 +74,17 @@ def test_the_averaged_path_follows_the_slow_flow_started_on_the_family():
 
 def test_members_come_from_the_first_branch_and_none_past_its_fold():
     """At 32.2 rad/s the family's first branch folds at a = 2.1053 rad (traced at 32.25 rad/s); at a = 2.2 rad
-    another branch has members (beta_dot 2.24 and 2.95 rad/s), which a guess alone could land on."""
+    another branch has members (beta_dot 2.24 and 2.95 rad/s), which a guess alone could land on. Members are
+    resolved up to FOLD_MARGIN below the fold; on the amplitude's nullcline F = 0 (30.7 rad/s, a = 1.05 and
+    1.15 rad) the drift is checked against the rates' typical size, not F itself."""
     a, _beta_dot = fn.first_branch(32.25)
     assert a[-1] == pytest.approx(2.105, abs=2e-3)
     with pytest.raises(fn.NoMember, match="folds"):
         fn.rates(2.2, 32.2)
+    with pytest.raises(fn.NoMember, match="folds"):
+        fn.rates(2.104, 32.13)
     assert fn.rates(2.0, 32.2)["valid"]
+    assert fn.rates(1.05, 30.7)["valid"] and fn.rates(1.15, 30.7)["valid"]
 
 
 def test_an_averaged_path_that_settles_keeps_what_it_computed():

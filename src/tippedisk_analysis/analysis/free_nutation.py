@@ -44,6 +44,9 @@ BRANCH_SPIN_STEP = 0.25  # rad/s: the family's first branch is traced at spins o
 BRANCH_TOL = 0.05  # rad/s: a member's beta_dot must lie this close to the traced branch's (else another branch)
 BRANCH_STEP = 0.15  # the largest continuation step along the branch (larger ones jumped past folds at 32.5 rad/s)
 SETTLED = 0.02  # rad: an averaged path whose nutation decays below this has reached the inverted spins (a = 0)
+FOLD_MARGIN = 0.05  # rad: members are resolved up to this far below the first branch's fold
+RATE_FLOORS = (1.0, 5.0)  # rad/m, rad s-1 m-1: typical |F|, |G| (medians 1.6, 4.2 on the study's grid): the two
+# eps probes must agree to DRIFT_AGREEMENT of the larger of a rate and its floor (a zero of F is no failure)
 _gamma = slow_flow.euler_system(True).variables[1]
 
 
@@ -104,19 +107,22 @@ def _member(amplitude: float, spin: float, setup: Setup | None) -> float:
     """beta_dot [rad/s] to start solving for the member (amplitude [rad], spin [rad/s]) on the first branch."""
     key = round(round(spin / BRANCH_SPIN_STEP) * BRANCH_SPIN_STEP, 6)
     a, beta_dot = first_branch(key, setup)
-    if not START_AMPLITUDE <= amplitude <= a[-1]:
-        raise NoMember(f"a = {amplitude:g} rad: at {key:g} rad/s the nutation family's first branch spans "
-                       f"{START_AMPLITUDE:g}-{a[-1]:.4f} rad (it folds there)")
+    if amplitude < START_AMPLITUDE:
+        raise NoMember(f"a = {amplitude:g} rad: give at least {START_AMPLITUDE:g} rad (the family's first member)")
+    if amplitude > a[-1] - FOLD_MARGIN:
+        raise NoMember(f"a = {amplitude:g} rad: at {key:g} rad/s the nutation family's first branch folds at "
+                       f"{a[-1]:.4f} rad; members are resolved up to {FOLD_MARGIN:g} rad below it")
     return float(np.interp(amplitude, a, beta_dot))
 
 
 def rates(amplitude: float, spin: float, setup: Setup | None = None) -> dict:
     """(N1) at the member with amplitude a [rad] and spin Omega0 [rad/s] at its turning point: ``amplitude_rate``
     F [rad/m], ``spin_rate`` G [rad s-1 m-1], ``precession_rate`` sigma [1/m] (N2), ``period`` [s], ``beta_dot``
-    at the start [rad/s], ``check`` (the two eps probes' relative difference), ``valid`` (the period map has a
-    double eigenvalue 1, no resonance, the probes agree) and ``precession_valid`` (the same for sigma).
-    The member is the one on the family's first branch (:func:`first_branch`); NoMember (a ParameterError) where
-    none is."""
+    at the start [rad/s], ``check`` (the two eps probes' difference, relative to the larger of each rate and its
+    floor RATE_FLOORS), ``valid`` (the period map has a double eigenvalue 1, no resonance, the probes agree to
+    DRIFT_AGREEMENT), ``reason`` (why not) and ``precession_valid`` (the same for sigma).
+    The member is the one on the family's first branch (:func:`first_branch`), up to FOLD_MARGIN below its fold;
+    NoMember (a ParameterError) beyond, or where none is."""
     a, spin = _positive(amplitude, "amplitude"), _positive(spin, "spin")
     if a >= math.pi:
         raise ParameterError(f"amplitude = {a!r} rad: give a value between 0 and pi")
@@ -132,12 +138,16 @@ def rates(amplitude: float, spin: float, setup: Setup | None = None) -> dict:
         raise NoMember(f"a = {a:g} rad, Omega0 = {spin:g} rad/s: the member found (beta_dot {found['free']:.4f} "
                        f"rad/s) is not on the first branch (beta_dot {guess:.4f} rad/s there)")
     period = found["period"]
-    return {"amplitude_rate": -found["drift"] / period, "spin_rate": found["along_drift"]["alpha_dot"] / period,
+    rate = np.array([-found["drift"], found["along_drift"]["alpha_dot"]]) / period
+    probes = np.array(found["probes"]) * np.array([-1.0, 1.0]) / period  # (F, G) at the two eps probes
+    spread = np.abs(probes[0] - probes[1]) / np.maximum(np.abs(rate), RATE_FLOORS)
+    agree = bool(np.all(spread <= DRIFT_AGREEMENT))
+    return {"amplitude_rate": float(rate[0]), "spin_rate": float(rate[1]),
             "precession_rate": float(np.mean(found["transverse_drift"])) / period,
-            "period": period, "beta_dot": found["free"], "check": found["check"],
-            "valid": found["valid"] and found["check"] <= DRIFT_AGREEMENT,
-            "reason": found["reason"] or ("" if found["check"] <= DRIFT_AGREEMENT else
-                                          f"the two eps probes differ by {found['check']:.2g} (relative)"),
+            "period": period, "beta_dot": found["free"], "check": float(spread.max()),
+            "valid": found["valid"] and agree,
+            "reason": found["reason"] or ("" if agree else f"the two eps probes differ by {spread.max():.2g} of "
+                                                           "the rates"),
             "precession_valid": found["valid"] and found["transverse_check"] <= DRIFT_AGREEMENT}
 
 
@@ -167,8 +177,9 @@ def precession_amplitude(state, amplitude: float, spin: float, setup: Setup | No
     multiplier: 2 abs(l . (x - x_top)) abs(v_beta) / abs(l . v), independent of the precession's phase, blind to the
     family's directions (l . t = 0 along them)."""
     x = np.asarray(state, dtype=float)
-    if x.shape != (len(slow_flow.EULER_STATE_NAMES),):
-        raise ParameterError(f"state: give one state ({', '.join(slow_flow.EULER_STATE_NAMES)}), not shape {x.shape}")
+    if x.shape != (len(slow_flow.EULER_STATE_NAMES),) or not np.all(np.isfinite(x)):
+        raise ParameterError(f"state: give one finite state ({', '.join(slow_flow.EULER_STATE_NAMES)}), shape "
+                             f"{x.shape} given")
     _pars(setup)
     a, spin = _positive(amplitude, "amplitude"), _positive(spin, "spin")
     top, _period, v, left = member_orbit(round(a, 4), round(spin, 4), setup)
@@ -178,9 +189,12 @@ def precession_amplitude(state, amplitude: float, spin: float, setup: Setup | No
 def field(amplitudes, spins, setup: Setup | None = None) -> xr.Dataset:
     """(N1) and (N2) on the grid ``amplitudes`` [rad] x ``spins`` [rad/s] (each increasing): ``amplitude_rate``,
     ``spin_rate``, ``precession_rate``, ``period``, ``exists`` (0 past the family's fold in the amplitude, where
-    no member exists and the rates are 0) and ``valid`` (0 there, at the last member before the fold, and where
+    no member is resolved, FOLD_MARGIN below it and beyond, and the rates are 0) and ``valid`` (0 there and where
     the drift or sigma fails its checks; each counted in the message)."""
-    a, spins = (np.asarray(v, dtype=float) for v in (amplitudes, spins))
+    try:
+        a, spins = (np.asarray(v, dtype=float) for v in (amplitudes, spins))
+    except (TypeError, ValueError):
+        raise ParameterError("amplitudes, spins: give two sequences of numbers [rad], [rad/s]") from None
     for name, v in (("amplitudes", a), ("spins", spins)):
         if v.ndim != 1 or v.size < 2 or not np.all(np.isfinite(v)) or np.any(np.diff(v) <= 0) or v[0] <= 0:
             raise ParameterError(f"{name}: give at least two positive increasing values")
@@ -200,11 +214,8 @@ def field(amplitudes, spins, setup: Setup | None = None) -> xr.Dataset:
                 out[key][i, j] = found[key]
             valid[i, j] = found["valid"] and found["precession_valid"]
     exists = np.isfinite(out["period"]).astype(np.int8)
-    ends = [(i, int(row.sum()) - 1) for i, row in enumerate(exists) if 0 < row.sum() < row.size]
-    for i, j in ends:  # the member next to the family's fold: its multipliers approach 1 there
-        valid[i, j] = 0
     missing = int(exists.size - exists.sum())
-    failed = int((~valid.astype(bool)).sum()) - missing - len(ends)
+    failed = int((~valid.astype(bool)).sum()) - missing
     for key in out:  # no member: 0, flagged by exists = 0 (a dataset holds no NaN)
         out[key] = np.where(exists.astype(bool), out[key], 0.0)
     coords = {"spin": ("spin", spins, {"units": "rad s-1", "long_name": "spin alpha_dot at the turning point"}),
@@ -220,11 +231,12 @@ def field(amplitudes, spins, setup: Setup | None = None) -> xr.Dataset:
         "period": (("spin", "amplitude"), out["period"], {"units": "s", "long_name": "period of the rolling orbit"}),
         "valid": (("spin", "amplitude"), valid, flag_attrs("drift and sigma defined and checked",
                                                            {"no": 0, "yes": 1})),
-        "exists": (("spin", "amplitude"), exists, flag_attrs("a member of the family exists (no: past its fold, "
-                                                             "the rates are 0 there)", {"no": 0, "yes": 1})),
+        "exists": (("spin", "amplitude"), exists, flag_attrs("a member of the first branch is resolved (no: within "
+                                                             f"{FOLD_MARGIN:g} rad of its fold or past it; the rates "
+                                                             "are 0 there)", {"no": 0, "yes": 1})),
     }, coords=coords)
-    message = (f"{int(valid.sum())} of {valid.size} points checked; {missing} beyond the family's fold, "
-               f"{len(ends)} next to it, {failed} failed their checks")
+    message = (f"{int(valid.sum())} of {valid.size} points checked; {missing} beyond the first branch (less "
+               f"than {FOLD_MARGIN:g} rad below its fold, or past it), {failed} failed their checks")
     ds.attrs = make_attrs("free_nutation_field", {"setup": repr(setup or Setup())}, "completed", message)
     return ds
 
@@ -244,7 +256,7 @@ def averaged_path(amplitude: float, spin: float, slow_time: float, setup: Setup 
 
     def rhs(_s, z):
         if z[0] < SETTLED:
-            raise _Ended("settled", f"the nutation decayed below {SETTLED:g} rad at Omega0 = {z[1]:.4f} rad/s")
+            raise _Ended("settled", f"the nutation decays below {SETTLED:g} rad")
         try:
             found = rates(z[0], z[1], setup)
         except NoMember as error:
@@ -277,7 +289,8 @@ def averaged_path(amplitude: float, spin: float, slow_time: float, setup: Setup 
                     coords={"slow_time": ("slow_time", times[: values.shape[1]], {"units": "m", "long_name":
                                                                                    "eps t"})})
     if status != "completed":
-        message += f"; the path is kept up to eps t = {reached:g} m (a = {values[0][-1]:.4f} rad)"
+        message += (f"; the path is kept up to eps t = {reached:g} m (a = {values[0][-1]:.4f} rad, Omega0 = "
+                    f"{values[1][-1]:.4f} rad/s)")
     ds.attrs = make_attrs("free_nutation_path", {"amplitude": float(amplitude), "spin": float(spin),
                                                  "slow_time": slow_time}, status, message)
     return ds

@@ -165,7 +165,8 @@ def drift_at(system: System, shooting: Shooting, amplitude: float, free_guess, p
              transverse: bool = False) -> dict:
     """The drift (per revolution per unit ``parameter``, extrapolated to 0) of the member of the family with
     ``amplitude`` (free coordinate solved from ``free_guess``) at ``pars`` (``parameter`` 0): {"drift",
-    "period", "check", "valid", "reason", "free"} (check: the two values' relative difference; valid: an
+    "period", "check", "valid", "reason", "free", "probes"} (check: the two values' relative difference; probes:
+    the drifts measured at the two values, [amplitude, *along] each; valid: an
     eigenvalue 1 for each label, no resonance, finite; reason: why not, '' if valid; free: the solved free
     coordinate). ``valid`` leaves ``check`` to the caller: relative to the drift itself it grows without bound
     at a zero of the drift, where the drift is still right (:func:`family_drift` judges it against the family's
@@ -189,10 +190,12 @@ def drift_at(system: System, shooting: Shooting, amplitude: float, free_guess, p
     except (TypeError, ValueError):
         raise ParameterError(f"pars: give the values of {', '.join(system.parameter_names)}") from None
     along = () if along is None else along
-    if (isinstance(along, str) or not isinstance(along, tuple | list)
+    if (isinstance(along, str) or not isinstance(along, tuple | list) or not all(isinstance(n, str) for n in along)
             or any(name not in shooting.fixed for name in along) or len(set(along)) != len(along)):
         raise ParameterError(f"along = {along!r}: give a tuple of names of the Shooting's fixed start values "
                              f"({', '.join(shooting.fixed)}), each once")
+    if not isinstance(transverse, bool):
+        raise ParameterError(f"transverse = {transverse!r}: give True or False")
     pars = dict(zip(system.parameter_names, map(float, vector)))
     shooters, pars, index, values = _drift_setup(system, shooting, pars, parameter, values, unperturbed)
     base = shooters[1]
@@ -214,7 +217,7 @@ def drift_at(system: System, shooting: Shooting, amplitude: float, free_guess, p
     drift = found["drift"]
     reason = _invalid_reason(found, len(along))
     out = {"drift": float(drift[0]), "period": period, "check": check, "valid": not reason, "reason": reason,
-           "free": free}
+           "free": free, "probes": found["measured"].T.tolist()}
     if along:
         out["along_drift"] = dict(zip(along, map(float, drift[1:])))
     if transverse:
