@@ -166,7 +166,7 @@ def drift_at(system: System, shooting: Shooting, amplitude: float, free_guess, p
     """The drift (per revolution per unit ``parameter``, extrapolated to 0) of the member of the family with
     ``amplitude`` (free coordinate solved from ``free_guess``) at ``pars`` (``parameter`` 0): {"drift",
     "period", "check", "valid", "reason", "free", "probes"} (check: the two values' relative difference; probes:
-    the drifts measured at the two values, [amplitude, *along] each; valid: an
+    the drifts measured at the two values, each the amplitude's and then the along labels'; valid: an
     eigenvalue 1 for each label, no resonance, finite; reason: why not, '' if valid; free: the solved free
     coordinate). ``valid`` leaves ``check`` to the caller: relative to the drift itself it grows without bound
     at a zero of the drift, where the drift is still right (:func:`family_drift` judges it against the family's
