@@ -52,19 +52,10 @@ def full_run(spin: float) -> dict:
     states = ta.propagate_grid(times)[5]
     x = fn.euler_states(states)
     turns = fn.turning_points(times, x[:, 1], x[:, 2])
-    crossed, tops = fn.top_crossings(times, x)
-    rho = []
-    for t, state in zip(crossed, tops):
-        before = turns["time"] < t
-        if not before.any():
-            continue
-        a, spin0 = turns["amplitude"][before][-1], turns["spin"][before][-1]
-        try:
-            rho.append((t * RUN_EPS, fn.precession_amplitude(state, a, spin0), a, spin0))
-        except fn.NoMember:  # the run lies beyond the family's first branch there (before it lands on it)
-            continue
+    rows = fn.precession_along(times, x)
+    rho = np.column_stack([rows[:, 0] * RUN_EPS, rows[:, 1:]])
     height = (model.observe(states.T, pars)["z_S"].max() - setup.disk.r) / setup.disk.e
-    return {"spin": spin, "turns": turns, "rho": np.array(rho), "height": float(height)}
+    return {"spin": spin, "turns": turns, "rho": rho, "height": float(height)}
 
 
 def rho_from_sigma(rows: np.ndarray, start: float) -> tuple[np.ndarray, np.ndarray]:

@@ -145,13 +145,8 @@ def test_a_small_precession_grows_at_the_precession_rate():
     system = slow_flow.euler_system()
     times = np.arange(0.0, 0.1 / eps, 0.0005)
     x = _run(system, top + 0.005 * right.real / abs(right[0]), system.with_pars(None, eps=eps), times)
-    turns = fn.turning_points(times, x[:, 1], x[:, 2])
-    crossed, states = fn.top_crossings(times, x)
-    rho = []
-    for t, state in zip(crossed, states):
-        before = turns["time"] < t
-        if before.any():
-            rho.append(fn.precession_amplitude(state, turns["amplitude"][before][-1], turns["spin"][before][-1]))
+    rows = fn.precession_along(times, x)
+    crossed, rho = rows[:, 0], rows[:, 1]
     growth = math.log(np.median(rho[-7:]) / np.median(rho[:7]))
     sigma = np.mean([fn.rates(amplitude, spin)["precession_rate"], fn.rates(0.21, 29.48)["precession_rate"]])
     span = (crossed[-4] - crossed[3]) * eps
@@ -171,17 +166,10 @@ def test_the_full_models_precession_grows_at_the_precession_rate():
     times = np.arange(0.0, 0.3 / eps, 0.0005)
     x = fn.euler_states(_run(model, inversion.start_state("smooth", 33.7, setup, -0.5 * math.pi + 0.1), pars,
                              times))
-    turns = fn.turning_points(times, x[:, 1], x[:, 2])
-    crossed, states = fn.top_crossings(times, x)
-    keep = crossed * eps > 0.05
-    rows = []
-    for t, state in zip(crossed[keep], states[keep]):
-        before = turns["time"] < t
-        a, spin = turns["amplitude"][before][-1], turns["spin"][before][-1]
-        rows.append((t * eps, a, spin, fn.precession_amplitude(state, a, spin)))
-    rows = np.array(rows)  # one per revolution (about 1 s)
-    sigma = np.array([fn.rates(a, spin)["precession_rate"] for _t, a, spin, _rho in rows])
-    predicted = np.trapezoid(sigma[1:-1], rows[1:-1, 0])
-    measured = math.log(np.median(rows[-3:, 3]) / np.median(rows[:3, 3]))
+    rows = fn.precession_along(times, x)
+    rows = rows[rows[:, 0] * eps > 0.05]  # one per revolution (about 1 s): time, rho, a, Omega0
+    sigma = np.array([fn.rates(a, spin)["precession_rate"] for _t, _rho, a, spin in rows])
+    predicted = np.trapezoid(sigma[1:-1], rows[1:-1, 0] * eps)
+    measured = math.log(np.median(rows[-3:, 1]) / np.median(rows[:3, 1]))
     assert np.all(sigma > 3.0)
     assert measured == pytest.approx(predicted, rel=0.25)

@@ -35,7 +35,7 @@ from ..results import make_attrs
 from . import inversion
 
 __all__ = ["NoMember", "shooting", "first_branch", "rates", "field", "averaged_path", "member_orbit",
-           "precession_amplitude", "top_crossings", "turning_points", "euler_states"]
+           "precession_amplitude", "precession_along", "top_crossings", "turning_points", "euler_states"]
 
 EPS_PROBES = (1e-4, 2e-4)  # m/s: the two values of eps at which the drift is measured (they must agree)
 DRIFT_AGREEMENT = 1e-2  # relative, as dynamics.melnikov
@@ -298,6 +298,25 @@ def averaged_path(amplitude: float, spin: float, slow_time: float, setup: Setup 
 
 class _Ended(Exception):
     """The averaged path ended: (status, message)."""
+
+
+def precession_along(times, states, setup: Setup | None = None) -> np.ndarray:
+    """Rows (time [s], rho [rad], a [rad], Omega0 [rad/s]), one per top crossing of a run sampled at ``times``
+    (``states`` (N, 5) in EULER_STATE_NAMES): the precession's amplitude about the member of the run's last
+    turning point; crossings before the first turning point, or whose member is not resolved, are left out."""
+    x = np.asarray(states, dtype=float)
+    turns = turning_points(times, x[:, 1], x[:, 2])
+    rows = []
+    for t, state in zip(*top_crossings(times, x)):
+        before = turns["time"] < t
+        if not before.any():
+            continue
+        a, spin = turns["amplitude"][before][-1], turns["spin"][before][-1]
+        try:
+            rows.append((t, precession_amplitude(state, a, spin, setup), a, spin))
+        except NoMember:  # the run lies beyond the family's first branch here
+            continue
+    return np.array(rows).reshape(-1, 4)
 
 
 def euler_states(reduced_states) -> np.ndarray:
