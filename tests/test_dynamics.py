@@ -110,6 +110,32 @@ def test_a_stored_branch_is_continued_with_the_same_system_only(ab, ab_branch, t
     assert (tmp_path / "ab.png").stat().st_size > 10_000
 
 
+def test_an_observables_rate_and_its_maxima_on_a_damped_oscillator():
+    """rate_of is grad . f (the energy of x'' + 2 zeta x' + x = 0 falls at 2 zeta v^2); sectioning at its downward
+    zeros finds the maxima of x(t) = exp(-zeta t) (cos wd t + zeta / wd sin wd t) from (1, 0): t = 2 pi k / wd,
+    the start (k = 0) included."""
+    from tippedisk_analysis.dynamics.poincare import crossings
+
+    x, v = hy.make_vars("x", "v")
+    zeta = 0.1
+    damped = dy.System("damped", [x, v], [v, -x - 2 * hy.par[0] * v], {"zeta": zeta})
+    energy = 0.5 * (x * x + v * v)
+    rated = damped.with_observables("damped_rates", {"E_rate": damped.rate_of(energy), "x_rate": damped.rate_of(x)})
+    assert damped.observables == {} and set(rated.observables) == {"E_rate", "x_rate"}
+    states = np.random.default_rng(1).normal(size=(2, 5))
+    np.testing.assert_allclose(rated.observe(states)["E_rate"], -2 * zeta * states[1] ** 2, rtol=1e-13)
+    run = crossings(rated, [1.0, 0.0], "x_rate", direction="negative", t_end=20.0)
+    wd = math.sqrt(1 - zeta**2)
+    k = np.arange(4)
+    assert len(run.times) == 4 and run.status == "completed"
+    np.testing.assert_allclose(run.times, 2 * math.pi * k / wd, rtol=1e-10)
+    np.testing.assert_allclose(run.states[:, 0], np.exp(-zeta * run.times), rtol=1e-9)
+    t = run.t_final
+    assert t == pytest.approx(20.0)
+    assert run.final[0] == pytest.approx(math.exp(-zeta * t) * (math.cos(wd * t) + zeta / wd * math.sin(wd * t)),
+                                         abs=1e-10)
+
+
 def test_a_second_analysis_of_the_same_system_compiles_nothing():
     system = ab_system("ab_reuse")
     dy.equilibrium_branch(system, [0.0, 0.0], "D", bounds=(0.0, 0.2))

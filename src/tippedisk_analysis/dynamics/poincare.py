@@ -72,6 +72,7 @@ class Crossings:
     t_final: float
     n_steps: int = 0
     first: dict | None = None  # {watched name: time of its first crossing, or None}
+    final: np.ndarray | None = None  # (n,) the state at t_final
 
 
 def _quantity(system: System, name: str):
@@ -142,7 +143,8 @@ def crossings(system: System, state, quantity: str, level: float = 0.0, *, pars=
         times, states = times[keep], states[keep]
         status, message = "nonfinite", f"the integration stopped ({outcome!r}) at t = {ta.time:.6g}; try a smaller tol"
     first = {name: w.time for name, w in zip(watch, watchers)}
-    return Crossings(times, states, status, message, float(ta.time), int(n_steps), first)
+    return Crossings(times, states, status, message, float(ta.time), int(n_steps), first,
+                     np.array(ta.state[: system.n], copy=True))
 
 
 def poincare_section(system: System, state, quantity: str, level: float = 0.0, *, pars=None,

@@ -194,6 +194,20 @@ class System:
                       time_units=self.time_units, compact_mode=self.compact_mode, description=self.description,
                       strict_parameters=False)
 
+    def with_observables(self, name: str, observables: dict) -> System:
+        """The same equations under ``name`` with ``observables`` {name: expression or (expression, units)} added
+        after its own (e.g. a quantity's rate, :meth:`rate_of`, to section a run at its extrema)."""
+        return System(name, self.variables, self.declared_rhs, self.parameters, state_names=self.state_names,
+                      state_scale=self.state_scale, observables={**self.observables, **observables},
+                      integrals=self.integrals, events=self.events, n_trivial=self.n_trivial, units=self.units,
+                      time_units=self.time_units, compact_mode=self.compact_mode, description=self.description,
+                      strict_parameters=self.strict_parameters)
+
+    def rate_of(self, expression):
+        """d/dt of ``expression`` (of the states and parameters) along the flow: grad(expression) . f."""
+        gradient = self.gradient_expressions([expression])
+        return expand_integer_powers(hy.sum([g * f for g, f in zip(gradient, self.rhs)]))
+
     def parameter_index(self, name: str) -> int:
         if name not in self.parameter_names:
             raise ParameterError(f"{self.name} has no parameter {name!r}; choose one of "
