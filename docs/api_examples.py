@@ -137,6 +137,9 @@ print(th.status, th.low, th.high)
 # the same with the slow flow (rolling + first-order slip), eps = 5 mm/s
 slow = inversion.with_eps(None, 0.005)
 print(inversion.spin_threshold(model="slow", setup=slow, bracket=(32.0, 36.0), scan=3, xtol=0.01).message)
+# how high S gets (its highest (z_S - r) / e within the horizon): a smooth curve in the initial spin
+print(inversion.highest_point(33.5))
+print(inversion.highest_points([32.5, 33.5, 34.5]).height.values)
 ''',
     "tippedisk_analysis.analysis.critical_spin": '''
 from tippedisk_analysis.analysis import critical_spin as cs

@@ -36,6 +36,42 @@ def test_the_threshold_is_bracketed_by_two_runs_that_differ():
     assert inversion.outcome(th.low).inverted is False and inversion.outcome(th.high).inverted is True  # rerun
 
 
+def test_the_highest_point_is_the_largest_sample_of_the_unreduced_ODE_model_1():
+    """heyoka's events at the maxima of z_S against 1-ms samples of ODE Model 1 in its own (unreduced) state."""
+    best = inversion.highest_point(33.0, horizon_s=8.0)
+    assert best.status == "horizon" and 5.0 < best.time < 8.0  # S highest at a late top crossing, not the start
+    full = td.simulate("ode-euler", 8.0, initial=InitialState(alpha_dot=33.0), dt_output=1e-3)
+    k = int(np.argmax(full.z_S.values))
+    sampled = (float(full.z_S[k]) - DISK.r) / DISK.e
+    assert 0 <= best.height - sampled < 1e-4  # samples miss the peak by (dt * omega)^2 at most
+    assert abs(best.time - float(full.time[k])) <= 1e-3
+    assert best.energy_lost == pytest.approx(float(full.E_tot[0] - full.E_tot[k]), rel=1e-3)
+
+
+def test_the_highest_point_passes_the_criterion_exactly_above_the_threshold():
+    """Two code paths (a terminal event at r + 0.8 e; the maxima of z_S) agree on each side of the threshold."""
+    th = inversion.spin_threshold(bracket=(33.0, 34.5), scan=3, xtol=2e-2)
+    assert th.status == "completed", th.message
+    below, above = inversion.highest_point(th.low), inversion.highest_point(th.high)
+    assert below.height < inversion.INVERSION_HEIGHT < above.height
+    assert above.height - below.height < 0.02  # a smooth curve: no jump at the threshold
+
+
+def test_inside_the_friction_cone_the_slow_flow_gets_S_as_high_as_the_full_model():
+    """The reduction against the full model: at eps = 0.01 m/s the slow flow's highest point equals ODE Model 1's
+    to 0.01 e over the spins around the threshold (measured 0.003-0.006). Where the start slides (a drilled disk
+    with e = 3.5 mm at its (C5) spin) the slow flow leaves the friction cone in the first swing instead."""
+    setup = inversion.with_eps(None, 0.01)
+    for spin in (32.5, 33.5, 34.1):
+        slow, full = (inversion.highest_point(spin, model=m, setup=setup) for m in ("slow", "smooth"))
+        assert 0.4 < full.height < 0.95 and abs(slow.height - full.height) < 0.01, (spin, slow, full)
+    disk = td.Disk.from_geometry().with_eccentricity(3.5e-3)
+    sliding = inversion.with_eps(td.Setup(disk=disk), 0.01)
+    slow = inversion.highest_point(35.04, model="slow", setup=sliding)
+    assert slow.status == "cone" and slow.time == 0.0  # ends at the cone before S rises at all
+    assert inversion.highest_point(35.04, setup=sliding).height > 0.2  # the full model slides and rises
+
+
 @pytest.mark.slow
 def test_the_slow_flow_has_the_smooth_models_threshold():
     """The threshold is a property of the first-order slow flow: at eps = 5e-3 m/s (the inversion takes ~75 s,
@@ -93,6 +129,9 @@ def test_moreau_model_1_never_lifts_S_above_G_and_its_energy_loss_is_the_time_st
     (lambda: inversion.spin_threshold(scan=1), "give an integer scan >= 2"),
     (lambda: inversion.outcome(40.0, gamma0=1.4), "already above the criterion"),
     (lambda: inversion.outcome(40.0, horizon_s=-1.0), "must be positive"),
+    (lambda: inversion.highest_point(40.0, horizon_s=math.nan), "must be positive"),
+    (lambda: inversion.highest_point(40.0, model="h1"), "unknown model 'h1'"),
+    (lambda: inversion.highest_points([33.0, -1.0]), "give a list of positive initial spins"),
 ])
 def test_bad_input_is_one_line_naming_the_fix(call, fragment):
     with pytest.raises(td.ParameterError, match=fragment) as info:

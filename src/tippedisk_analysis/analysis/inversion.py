@@ -15,6 +15,10 @@ Models (MODELS):
 
 Outcomes: ``inverted``; ``horizon``, ``fell`` (the tilt reached the fall angle) and ``cone`` do not invert;
 ``lift_off`` (the bilateral contact stops being valid) and ``nonfinite`` decide nothing.
+
+How high S gets (:func:`highest_point`): the run goes on over the whole horizon and the largest z_S is taken
+at the maxima of z_S (heyoka events on dz_S/dt). Over the initial spin it is a smooth curve, which the criterion
+cuts at the threshold.
 """
 
 from __future__ import annotations
@@ -29,9 +33,11 @@ from dataclasses import dataclass
 import heyoka as hy
 import numpy as np
 import xarray as xr
+from tqdm.auto import tqdm
 
 from .. import kinematics as kin
 from ..dynamics import Event, System
+from ..dynamics.poincare import crossings
 from ..errors import ParameterError
 from ..models import held_spin, ode, reduced, slow_flow
 from ..parameters import InitialState, Setup
@@ -39,7 +45,8 @@ from ..results import make_attrs
 
 __all__ = ["MODELS", "INVERSION_HEIGHT", "Outcome", "Threshold", "horizon", "system", "start_state", "check_start",
            "parameters",
-           "outcome", "spin_threshold", "with_eps", "threshold_dataset"]
+           "outcome", "spin_threshold", "with_eps", "threshold_dataset", "Highest", "height_system",
+           "highest_point", "highest_points"]
 
 MODELS = ("smooth", "slow", "held")
 INVERSION_HEIGHT = 0.8  # z_S > r + 0.8 e: S well above G
@@ -86,11 +93,15 @@ def horizon(eps: float) -> float:
     return HORIZON * max(1.0, HORIZON_EPS / float(eps))
 
 
+def _base_system(model: str) -> System:
+    _check_model(model)
+    return {"smooth": reduced.system, "slow": slow_flow.system, "held": held_spin.system}[model]()
+
+
 @functools.lru_cache(maxsize=None)
 def system(model: str) -> System:
     """The model's System with the terminal event ``inverted`` (z_S rising through r + 0.8 e) added."""
-    _check_model(model)
-    base = {"smooth": reduced.system, "slow": slow_flow.system, "held": held_spin.system}[model]()
+    base = _base_system(model)
     z_S = base.observables["z_S"][0]
     r, e = (hy.par[base.parameter_index(name)] for name in ("r", "e"))
     return base.with_events(base.name + "_inversion", [Event("inverted", z_S - r - INVERSION_HEIGHT * e, "positive")])
@@ -220,6 +231,89 @@ def spin_threshold(*, model: str = "smooth", setup: Setup | None = None, gamma0:
     where = ", ".join(f"{0.5 * (x + y):.6g}" for x, y in crossings)
     return _threshold(spin, a, b, "several_crossings", f"the outcome changes at {where} rad/s (inverts at "
                       f"{decided[0][0]:g} rad/s: {decided[0][1]}); no single threshold" + note, tuple(crossings), runs)
+
+
+@dataclass(frozen=True)
+class Highest:
+    """The highest point S reaches on one run from Table 3's start at ``spin`` [rad/s], within the horizon or
+    until the run ended (``status``: ``horizon``, or the model's event ``fell``, ``cone``, ``lift_off``, or
+    ``nonfinite``): ``height`` (z_S - r) / e there, ``time`` [s] and ``energy_lost`` E_tot(0) - E_tot(time) [J]
+    (friction's work; for the held model also the holding torque's). The criterion holds where height exceeds
+    INVERSION_HEIGHT."""
+
+    spin: float
+    height: float
+    time: float
+    energy_lost: float
+    status: str
+
+
+@functools.lru_cache(maxsize=None)
+def height_system(model: str) -> System:
+    """The model's System with the observable ``z_S_rate`` (dz_S/dt, m/s): its downward zeros are z_S's maxima."""
+    base = _base_system(model)
+    rate = base.rate_of(base.observables["z_S"][0])
+    return base.with_observables(base.name + "_height", {"z_S_rate": (rate, "m s-1")})
+
+
+def highest_point(spin: float, *, model: str = "smooth", setup: Setup | None = None, gamma0: float | None = None,
+                  horizon_s: float | None = None) -> Highest:
+    """Run ``model`` from Table 3's start at initial spin ``spin`` [rad/s] over the horizon (default
+    :func:`horizon`; the run goes on past the criterion) and return the highest point S reaches: the largest of
+    z_S at the start, at every maximum of z_S (heyoka events on dz_S/dt, located to the integrator's tolerance)
+    and at the end."""
+    setup = Setup() if setup is None else setup
+    gamma0 = InitialState().gamma if gamma0 is None else float(gamma0)
+    check_start(setup, gamma0)
+    t_end = horizon(setup.friction.eps) if horizon_s is None else float(horizon_s)
+    if not (math.isfinite(t_end) and t_end > 0):
+        raise ParameterError(f"horizon = {t_end} s must be positive")
+    model_system, pars = height_system(model), parameters(model, setup, spin)
+    start = start_state(model, spin, setup, gamma0)
+    run = crossings(model_system, start, "z_S_rate", 0.0, pars=pars, direction="negative", t_end=t_end,
+                    tol=TOL, events=True)
+    times = np.concatenate([[0.0], run.times, [run.t_final]])
+    states = np.vstack([start, run.states, run.final])
+    finite = np.all(np.isfinite(states), axis=1)
+    observed = model_system.observe(states[finite].T, pars)
+    best = int(np.argmax(observed["z_S"]))
+    status = {"completed": "horizon"}.get(run.status, run.status)
+    return Highest(float(spin), float((observed["z_S"][best] - setup.disk.r) / setup.disk.e),
+                   float(times[finite][best]), float(observed["E_tot"][0] - observed["E_tot"][best]), status)
+
+
+def highest_points(spins, *, model: str = "smooth", setup: Setup | None = None, gamma0: float | None = None,
+                   horizon_s: float | None = None, progress: bool = False) -> xr.Dataset:
+    """:func:`highest_point` at each of ``spins`` [rad/s] as a dataset (kind ``highest_point``, dim ``spin``)."""
+    spins = np.asarray(spins, dtype=float)
+    if spins.ndim != 1 or not spins.size or not np.all(np.isfinite(spins) & (spins > 0)):
+        raise ParameterError(f"spins = {spins!r}: give a list of positive initial spins in rad/s")
+    setup = Setup() if setup is None else setup
+    rows = [highest_point(w, model=model, setup=setup, gamma0=gamma0, horizon_s=horizon_s)
+            for w in tqdm(spins, desc=f"highest point ({model})", disable=not progress, unit="run")]
+    ended = {"horizon": 0, "fell": 1, "cone": 2, "lift_off": 3, "nonfinite": 4}
+    ds = xr.Dataset(
+        {"height": ("spin", [h.height for h in rows],
+                    {"units": "1", "long_name": "highest (z_S - r) / e of the run"}),
+         "time": ("spin", [h.time for h in rows], {"units": "s", "long_name": "time at which S is highest"}),
+         "energy_lost": ("spin", [h.energy_lost for h in rows],
+                         {"units": "J", "long_name": "energy lost from the start until S is highest"}),
+         "ending": ("spin", np.array([ended[h.status] for h in rows], dtype=np.int8),
+                    {"long_name": "how the run ended", "flag_values": np.arange(len(ended), dtype=np.int8),
+                     "flag_meanings": " ".join(ended)})},
+        coords={"spin": ("spin", spins, {"units": "rad s-1", "long_name": "initial spin alpha_dot(0)"})})
+    gamma0 = InitialState().gamma if gamma0 is None else float(gamma0)
+    config = {"model": model, "setup": repr(setup), "gamma0": gamma0, "tol": TOL,
+              "horizon_s": horizon(setup.friction.eps) if horizon_s is None else float(horizon_s)}
+    undecided = sum(h.status in UNDECIDED for h in rows)
+    status = "partial" if undecided else "completed"
+    heights = ds.height.values
+    message = (f"{len(rows)} runs; highest (z_S - r) / e from {heights.min():.4g} to {heights.max():.4g}"
+               + (f"; {undecided} run(s) ended by lift-off or a non-finite state (highest point up to there)"
+                  if undecided else ""))
+    ds.attrs = make_attrs("highest_point", config, status, message,
+                          title=f"Highest point of S from the Table 3 start over the initial spin ({model})")
+    return ds
 
 
 def _threshold(spin, low, high, status, message, crossings, runs) -> Threshold:
