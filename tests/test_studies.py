@@ -4,7 +4,8 @@ import tippedisk_analysis as td
 from tippedisk_analysis.cli import main, study
 
 STUDIES = study.names()
-SLOW_STUDIES = {"basins", "continuation", "critical_spin", "fig09_10_coulomb_contensou", "held_spin", "lyapunov_map",
+SLOW_STUDIES = {"basins", "continuation", "critical_spin", "fig09_10_coulomb_contensou", "held_spin", "highest_point",
+                "lyapunov_map",
                 "free_nutation", "nutation_cycles", "periodic_orbits", "rolling"}  # > 1 s
 
 
