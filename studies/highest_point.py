@@ -32,7 +32,7 @@ SPINS = np.round(np.arange(31.5, 35.501, 0.025), 3)  # rad/s, Tables 1-2 disk
 DISK_SPAN = (0.97, 1.12)  # other disks: spins over this span of their prediction (C5)
 DISK_STEPS = 121
 LEVELS = (0.5, 0.8, 0.9, 0.99)  # (z_S - r) / e; 0.8 is the criterion's
-EPS_PAIR = (0.1, 0.01)  # m/s: the disks' threshold at the first; the slow flow checked at the second
+EPS_PAIR = (0.1, inversion.REDUCTION_EPS)  # m/s: the disks' threshold at the first; the slow flow checked at the second
 
 
 def curves(quick: bool) -> dict:
@@ -104,10 +104,9 @@ def disk_row(disk) -> dict:
     for eps, setup in zip(EPS_PAIR, (fast, slow)):
         low, at, high = (inversion.highest_point(f * predicted, setup=setup).height for f in (0.99, 1.0, 1.01))
         row[f"height_at_prediction_{eps:g}"], row[f"slope_{eps:g}"] = at, (high - low) / (0.02 * predicted)
-    run = inversion.outcome(th.high, model="slow", setup=slow)
-    row["slow_flow_ending"], row["slow_flow_time"] = run.status, run.time
-    row["slow_height"] = inversion.highest_point(th.high, model="slow", setup=slow).height
-    row["full_height"] = inversion.highest_point(th.high, setup=slow).height
+    check = inversion.check_reduction(th.high, td.Setup(disk=disk))
+    row["slow_flow_ending"], row["slow_flow_time"] = check.slow.status, check.slow.t_end
+    row["slow_height"], row["full_height"] = check.slow.height, check.full.height
     return row
 
 

@@ -251,6 +251,22 @@ def test_command_prints_both_and_json(capsys):
     assert "omega_c = 30.23" in text and "initial spin threshold >= 32.95" in text
 
 
+def test_simulate_says_how_high_the_prediction_gets_and_whether_the_start_slides(capsys):
+    """--simulate: the full model's threshold, S's highest point at (C5) (below the criterion), and the slow flow
+    against ODE Model 1 at the threshold: it holds for Tables 1-2; Table 2's disk with e = 3.5 mm slides in its
+    first swing (the slow flow ends at the friction cone within a second)."""
+    assert main(["critical-spin", "--simulate", "--json", "--e", "0.0035"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["full_model_threshold"] > out["initial_spin_threshold"] and out["height_at_prediction"] < 0.8
+    check = out["reduction_check"]
+    assert out["reduction_holds"] is False and check["spin"] >= out["full_model_threshold"]
+    assert check["slow_flow_ending"] in ("cone", "lift_off") and check["slow_flow_end_time"] < 1.0
+    assert check["full_model_height"] > 0.5 > check["slow_flow_height"]  # the full model slides and still rises
+    assert main(["critical-spin", "--simulate"]) == 0
+    text = capsys.readouterr().out
+    assert "at the predicted spin S gets to r + 0.6" in text and "the reduction holds" in text
+
+
 @pytest.mark.parametrize("argv, status, words", [
     (["--e", "0.05"], 2, "not smaller than the radius"),
     (["--eps", "0"], 2, "eps > 0"),

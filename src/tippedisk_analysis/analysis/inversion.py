@@ -46,13 +46,15 @@ from ..results import make_attrs
 __all__ = ["MODELS", "INVERSION_HEIGHT", "Outcome", "Threshold", "horizon", "system", "start_state", "check_start",
            "parameters",
            "outcome", "spin_threshold", "with_eps", "threshold_dataset", "Highest", "height_system",
-           "highest_point", "highest_points"]
+           "highest_point", "highest_points", "ReductionCheck", "check_reduction"]
 
 MODELS = ("smooth", "slow", "held")
 INVERSION_HEIGHT = 0.8  # z_S > r + 0.8 e: S well above G
 HORIZON = 150.0  # s, at eps = HORIZON_EPS
 HORIZON_EPS = 0.1  # m/s
 TOL = 1e-10  # Taylor tolerance of the runs
+REDUCTION_EPS = 0.01  # m/s: the slow flow is checked against ODE Model 1 here
+REDUCTION_TOL = 0.05  # (z_S - r) / e: the two highest points agree this well where the reduction holds
 NOT_INVERTING = ("horizon", "fell", "cone")
 UNDECIDED = ("lift_off", "nonfinite")
 
@@ -236,16 +238,17 @@ def spin_threshold(*, model: str = "smooth", setup: Setup | None = None, gamma0:
 @dataclass(frozen=True)
 class Highest:
     """The highest point S reaches on one run from Table 3's start at ``spin`` [rad/s], within the horizon or
-    until the run ended (``status``: ``horizon``, or the model's event ``fell``, ``cone``, ``lift_off``, or
-    ``nonfinite``): ``height`` (z_S - r) / e there, ``time`` [s] and ``energy_lost`` E_tot(0) - E_tot(time) [J]
-    (friction's work; for the held model also the holding torque's). The criterion holds where height exceeds
-    INVERSION_HEIGHT."""
+    until the run ended (``status`` at ``t_end`` [s]: ``horizon``, or the model's event ``fell``, ``cone``,
+    ``lift_off``, or ``nonfinite``): ``height`` (z_S - r) / e there, ``time`` [s] and ``energy_lost`` E_tot(0) -
+    E_tot(time) [J] (friction's work; for the held model also the holding torque's). The criterion holds where
+    height exceeds INVERSION_HEIGHT."""
 
     spin: float
     height: float
     time: float
     energy_lost: float
     status: str
+    t_end: float
 
 
 @functools.lru_cache(maxsize=None)
@@ -279,7 +282,28 @@ def highest_point(spin: float, *, model: str = "smooth", setup: Setup | None = N
     best = int(np.argmax(observed["z_S"]))
     status = {"completed": "horizon"}.get(run.status, run.status)
     return Highest(float(spin), float((observed["z_S"][best] - setup.disk.r) / setup.disk.e),
-                   float(times[finite][best]), float(observed["E_tot"][0] - observed["E_tot"][best]), status)
+                   float(times[finite][best]), float(observed["E_tot"][0] - observed["E_tot"][best]), status,
+                   run.t_final)
+
+
+@dataclass(frozen=True)
+class ReductionCheck:
+    """The slow flow (the reduction) against ODE Model 1 for one start at eps = REDUCTION_EPS: both runs' highest
+    points. The reduction ``holds`` where they agree to REDUCTION_TOL; a start that slides in its first swing
+    leaves the slow manifold, and the slow flow ends at the cone or lifts off instead (docs/inversion.md)."""
+
+    slow: Highest
+    full: Highest
+
+    @property
+    def holds(self) -> bool:
+        return abs(self.slow.height - self.full.height) <= REDUCTION_TOL
+
+
+def check_reduction(spin: float, setup: Setup | None = None, gamma0: float | None = None) -> ReductionCheck:
+    """:class:`ReductionCheck` of Table 3's start at initial spin ``spin`` [rad/s] (``setup``'s eps replaced)."""
+    setup = with_eps(setup, REDUCTION_EPS)
+    return ReductionCheck(*(highest_point(spin, model=m, setup=setup, gamma0=gamma0) for m in ("slow", "smooth")))
 
 
 def highest_points(spins, *, model: str = "smooth", setup: Setup | None = None, gamma0: float | None = None,
@@ -298,6 +322,7 @@ def highest_points(spins, *, model: str = "smooth", setup: Setup | None = None, 
          "time": ("spin", [h.time for h in rows], {"units": "s", "long_name": "time at which S is highest"}),
          "energy_lost": ("spin", [h.energy_lost for h in rows],
                          {"units": "J", "long_name": "energy lost from the start until S is highest"}),
+         "end_time": ("spin", [h.t_end for h in rows], {"units": "s", "long_name": "time at which the run ended"}),
          "ending": ("spin", np.array([ended[h.status] for h in rows], dtype=np.int8),
                     {"long_name": "how the run ended", "flag_values": np.arange(len(ended), dtype=np.int8),
                      "flag_meanings": " ".join(ended)})},

@@ -20,7 +20,8 @@ def _arguments(p) -> None:
                         "the full model's eps, horizon 150 s x max(1, 0.1/eps))")
     p.add_argument("--simulate", action="store_true",
                    help="also find the full model's threshold by bisection (ODE Model 1: seconds to a minute at eps "
-                        "0.1, longer at small eps)")
+                        "0.1, longer at small eps), how high S gets at the predicted spin, and whether the slow "
+                        "flow holds at the threshold (eps 0.01)")
     p.add_argument("--json", action="store_true",
                    help='print one JSON object: {"omega_critical": ..., "initial_spin_threshold": ..., ...} in rad/s')
     add_disk(p)
@@ -58,6 +59,15 @@ def critical_spin(args) -> int:
         out["full_model_threshold"] = th.spin if th.status == "completed" else None
         out["full_model_status"] = th.status
         out["full_model_message"] = th.message
+        if out["initial_spin_threshold"]:
+            out["height_at_prediction"] = inversion.highest_point(out["initial_spin_threshold"], setup=setup,
+                                                                  gamma0=gamma0).height
+        if th.status == "completed":
+            check = inversion.check_reduction(th.high, setup, gamma0)
+            out["reduction_holds"] = check.holds
+            out["reduction_check"] = {"eps": inversion.REDUCTION_EPS, "spin": th.high,
+                                      "slow_flow_height": check.slow.height, "slow_flow_ending": check.slow.status,
+                                      "slow_flow_end_time": check.slow.t_end, "full_model_height": check.full.height}
     if args.json:
         print(json.dumps(out))
     else:
@@ -95,4 +105,15 @@ def _text(out: dict) -> str:
             lines.append(f"full model (ODE Model 1, eps {out['eps']:g} m/s, mu {out['mu']:g}): inverts above "
                          f"{full:.4f} rad/s, {diff:+.4f} rad/s ({100 * diff / predicted:+.2f} % of the prediction) "
                          "above it")
+        if "height_at_prediction" in out:
+            lines.append(f"at the predicted spin S gets to r + {out['height_at_prediction']:.3f} e (the criterion: "
+                         "r + 0.8 e; docs/inversion.md, How high S gets)")
+        if "reduction_check" in out:
+            c = out["reduction_check"]
+            verdict = ("holds: the start stays in the friction cone" if out["reduction_holds"] else
+                       f"does not hold: the slow flow ended ({c['slow_flow_ending']}) at {c['slow_flow_end_time']:.2f}"
+                       " s, the start slides in its first swing")
+            lines.append(f"the slow flow at {c['spin']:.4f} rad/s, eps {c['eps']:g} m/s, gets S to "
+                         f"r + {c['slow_flow_height']:.3f} e, ODE Model 1 to r + {c['full_model_height']:.3f} e: the "
+                         f"reduction {verdict}")
     return "\n".join(lines)
