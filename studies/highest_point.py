@@ -67,10 +67,17 @@ def curve(path: Path, model: str, setup, spins):
 
 
 def level_crossings(ds, level: float) -> list[float]:
-    """Initial spins [rad/s] where the highest point crosses ``level`` upwards, interpolated linearly."""
+    """Initial spins [rad/s] where the highest point crosses ``level`` (either way), interpolated linearly."""
     h, w = ds.height.values, ds.spin.values
-    up = np.flatnonzero((h[:-1] <= level) & (h[1:] > level))
-    return [float(w[i] + (level - h[i]) * (w[i + 1] - w[i]) / (h[i + 1] - h[i])) for i in up]
+    cross = np.flatnonzero((h[:-1] - level) * (h[1:] - level) < 0)
+    return [float(w[i] + (level - h[i]) * (w[i + 1] - w[i]) / (h[i + 1] - h[i])) for i in cross]
+
+
+def dips(ds) -> str:
+    """Where the curve falls between neighbouring spins by more than 1e-4 (the integrator's noise lies below)."""
+    h, w = ds.height.values, ds.spin.values
+    down = np.flatnonzero(np.diff(h) < -1e-4)
+    return ", ".join(f"{h[i] - h[i + 1]:.1e} at {w[i]:.3f}-{w[i + 1]:.3f} rad/s (r + {h[i]:.3f} e)" for i in down)
 
 
 def report(tag: str, ds, predicted: float) -> dict:
@@ -79,8 +86,8 @@ def report(tag: str, ds, predicted: float) -> dict:
     shown = ", ".join(f"{level:g}: " + ("/".join(f"{w:.3f}" for w in ws) or "none") for level, ws in levels.items())
     lost = ds.energy_lost.values
     print(f"{tag}: (C5) {predicted:.4f} rad/s, where S gets to r + {at:.3f} e; the curve crosses (rad/s) {shown}; "
-          f"energy lost until S is highest {lost.min() * 1e3:.2f}-{lost.max() * 1e3:.2f} mJ; {ds.attrs['message']}",
-          flush=True)
+          f"energy lost until S is highest {lost.min() * 1e3:.2f}-{lost.max() * 1e3:.2f} mJ; falls by "
+          f"{dips(ds) or 'nowhere more than 1e-4'}; {ds.attrs['message']}", flush=True)
     return levels
 
 

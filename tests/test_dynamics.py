@@ -130,6 +130,10 @@ def test_an_observables_rate_and_its_maxima_on_a_damped_oscillator():
     assert len(run.times) == 4 and run.status == "completed"
     np.testing.assert_allclose(run.times, 2 * math.pi * k / wd, rtol=1e-10)
     np.testing.assert_allclose(run.states[:, 0], np.exp(-zeta * run.times), rtol=1e-9)
+    with pytest.raises(td.ParameterError, match="'x' is a str; give a heyoka expression of damped's variables"):
+        damped.rate_of("x")
+    with pytest.raises(td.ParameterError, match="observable 'bad'"):
+        damped.with_observables("bad", {"bad": [x]})
     t = run.t_final
     assert t == pytest.approx(20.0)
     assert run.final[0] == pytest.approx(math.exp(-zeta * t) * (math.cos(wd * t) + zeta / wd * math.sin(wd * t)),

@@ -129,9 +129,13 @@ def test_moreau_model_1_never_lifts_S_above_G_and_its_energy_loss_is_the_time_st
     (lambda: inversion.spin_threshold(scan=1), "give an integer scan >= 2"),
     (lambda: inversion.outcome(40.0, gamma0=1.4), "already above the criterion"),
     (lambda: inversion.outcome(40.0, horizon_s=-1.0), "must be positive"),
-    (lambda: inversion.highest_point(40.0, horizon_s=math.nan), "must be positive"),
+    (lambda: inversion.highest_point(40.0, horizon_s=math.nan), "horizon_s = nan: give a finite number"),
     (lambda: inversion.highest_point(40.0, model="h1"), "unknown model 'h1'"),
     (lambda: inversion.highest_points([33.0, -1.0]), "give a list of positive initial spins"),
+    (lambda: inversion.highest_points([33.0, "abc"]), "give a list of positive initial spins"),
+    (lambda: inversion.highest_point(-5.0), "give a positive initial spin"),
+    (lambda: inversion.highest_point(33.0, gamma0="x"), "gamma0 = 'x': give a finite number"),
+    (lambda: inversion.outcome(33.0, setup=td.Disk()), "setup is a Disk; give a Setup"),
 ])
 def test_bad_input_is_one_line_naming_the_fix(call, fragment):
     with pytest.raises(td.ParameterError, match=fragment) as info:

@@ -153,17 +153,37 @@ def parameters(model: str, setup: Setup, spin: float | None = None) -> np.ndarra
     return np.array([values[name] for name in system(model).parameter_names])
 
 
+def _number(value, what: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
+        raise ParameterError(f"{what} = {value!r}: give a finite number")
+    return float(value)
+
+
+def run_inputs(spin, setup: Setup | None, gamma0, horizon_s) -> tuple[float, Setup, float, float]:
+    """The checked inputs of one run from Table 3's start: the initial spin [rad/s] (positive: a negative one
+    is its mirror image), the setup (default Tables 1-3), gamma0 [rad] and the horizon [s] (default
+    :func:`horizon`); one-line ParameterErrors otherwise."""
+    spin = _number(spin, "spin")
+    if spin <= 0:
+        raise ParameterError(f"spin = {spin:g} rad/s: give a positive initial spin (a negative one is the mirror "
+                             "image of the positive one)")
+    setup = Setup() if setup is None else setup
+    if not isinstance(setup, Setup):
+        raise ParameterError(f"setup is a {type(setup).__name__}; give a Setup, e.g. Setup(disk=disk)")
+    gamma0 = InitialState().gamma if gamma0 is None else _number(gamma0, "gamma0")
+    check_start(setup, gamma0)
+    t_end = horizon(setup.friction.eps) if horizon_s is None else _number(horizon_s, "horizon_s")
+    if not t_end > 0:
+        raise ParameterError(f"horizon = {t_end} s must be positive")
+    return spin, setup, gamma0, t_end
+
+
 def outcome(spin: float, *, model: str = "smooth", setup: Setup | None = None, gamma0: float | None = None,
             horizon_s: float | None = None) -> Outcome:
     """Run ``model`` from Table 3's start at initial spin ``spin`` [rad/s] until it inverts, ends or reaches
     the horizon (default :func:`horizon` of the setup's eps)."""
-    setup = Setup() if setup is None else setup
-    gamma0 = InitialState().gamma if gamma0 is None else float(gamma0)
-    check_start(setup, gamma0)
+    spin, setup, gamma0, t_end = run_inputs(spin, setup, gamma0, horizon_s)
     model_system = system(model)
-    t_end = horizon(setup.friction.eps) if horizon_s is None else float(horizon_s)
-    if not t_end > 0:
-        raise ParameterError(f"horizon = {t_end} s must be positive")
     ta = copy.deepcopy(model_system.taylor(TOL, events=True))
     ta.time = 0.0
     ta.state[:] = start_state(model, spin, setup, gamma0)
@@ -185,15 +205,16 @@ def spin_threshold(*, model: str = "smooth", setup: Setup | None = None, gamma0:
     """The initial spin above which Table 3's start inverts (module docstring), for ``model``: ``scan`` spins
     across ``bracket`` [rad/s] find where the outcome changes, each change is bisected to ``xtol``."""
     _check_model(model)
-    low, high = map(float, bracket)
+    try:
+        low, high = map(float, bracket)
+    except (TypeError, ValueError):
+        low = high = math.nan
     if not (math.isfinite(low) and math.isfinite(high) and 0 < low < high):
         raise ParameterError(f"bracket = {bracket!r}: give two spins 0 < low < high in rad/s")
     if not (isinstance(scan, numbers.Integral) and scan >= 2 and xtol > 0):
         raise ParameterError(f"scan = {scan!r} and xtol = {xtol!r}: give an integer scan >= 2 spins and xtol > 0 "
                              "rad/s")
-    setup = Setup() if setup is None else setup
-    gamma0 = InitialState().gamma if gamma0 is None else float(gamma0)
-    check_start(setup, gamma0)
+    _low, setup, gamma0, _t_end = run_inputs(low, setup, gamma0, horizon_s)
     runs = []
 
     def decide(spin):
@@ -265,12 +286,7 @@ def highest_point(spin: float, *, model: str = "smooth", setup: Setup | None = N
     :func:`horizon`; the run goes on past the criterion) and return the highest point S reaches: the largest of
     z_S at the start, at every maximum of z_S (heyoka events on dz_S/dt, located to the integrator's tolerance)
     and at the end."""
-    setup = Setup() if setup is None else setup
-    gamma0 = InitialState().gamma if gamma0 is None else float(gamma0)
-    check_start(setup, gamma0)
-    t_end = horizon(setup.friction.eps) if horizon_s is None else float(horizon_s)
-    if not (math.isfinite(t_end) and t_end > 0):
-        raise ParameterError(f"horizon = {t_end} s must be positive")
+    spin, setup, gamma0, t_end = run_inputs(spin, setup, gamma0, horizon_s)
     model_system, pars = height_system(model), parameters(model, setup, spin)
     start = start_state(model, spin, setup, gamma0)
     run = crossings(model_system, start, "z_S_rate", 0.0, pars=pars, direction="negative", t_end=t_end,
@@ -309,10 +325,13 @@ def check_reduction(spin: float, setup: Setup | None = None, gamma0: float | Non
 def highest_points(spins, *, model: str = "smooth", setup: Setup | None = None, gamma0: float | None = None,
                    horizon_s: float | None = None, progress: bool = False) -> xr.Dataset:
     """:func:`highest_point` at each of ``spins`` [rad/s] as a dataset (kind ``highest_point``, dim ``spin``)."""
-    spins = np.asarray(spins, dtype=float)
+    try:
+        spins = np.asarray(spins, dtype=float)
+    except (TypeError, ValueError):
+        spins = np.array([])
     if spins.ndim != 1 or not spins.size or not np.all(np.isfinite(spins) & (spins > 0)):
-        raise ParameterError(f"spins = {spins!r}: give a list of positive initial spins in rad/s")
-    setup = Setup() if setup is None else setup
+        raise ParameterError("spins: give a list of positive initial spins in rad/s, e.g. [32.5, 33.5]")
+    _spin, setup, gamma0, _t_end = run_inputs(spins[0], setup, gamma0, horizon_s)
     rows = [highest_point(w, model=model, setup=setup, gamma0=gamma0, horizon_s=horizon_s)
             for w in tqdm(spins, desc=f"highest point ({model})", disable=not progress, unit="run")]
     ended = {"horizon": 0, "fell": 1, "cone": 2, "lift_off": 3, "nonfinite": 4}
@@ -327,7 +346,6 @@ def highest_points(spins, *, model: str = "smooth", setup: Setup | None = None, 
                     {"long_name": "how the run ended", "flag_values": np.arange(len(ended), dtype=np.int8),
                      "flag_meanings": " ".join(ended)})},
         coords={"spin": ("spin", spins, {"units": "rad s-1", "long_name": "initial spin alpha_dot(0)"})})
-    gamma0 = InitialState().gamma if gamma0 is None else float(gamma0)
     config = {"model": model, "setup": repr(setup), "gamma0": gamma0, "tol": TOL,
               "horizon_s": horizon(setup.friction.eps) if horizon_s is None else float(horizon_s)}
     undecided = sum(h.status in UNDECIDED for h in rows)

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import copy
 import hashlib
+import numbers
 import threading
 from dataclasses import dataclass
 
@@ -197,16 +198,29 @@ class System:
     def with_observables(self, name: str, observables: dict) -> System:
         """The same equations under ``name`` with ``observables`` {name: expression or (expression, units)} added
         after its own (e.g. a quantity's rate, :meth:`rate_of`, to section a run at its extrema)."""
+        added = {}
+        for key, value in dict(observables).items():
+            expression, units = value if isinstance(value, tuple) and len(value) == 2 else (value, "")
+            added[key] = (self._expression(expression, f"observable {key!r}"), str(units))
         return System(name, self.variables, self.declared_rhs, self.parameters, state_names=self.state_names,
-                      state_scale=self.state_scale, observables={**self.observables, **observables},
+                      state_scale=self.state_scale, observables={**self.observables, **added},
                       integrals=self.integrals, events=self.events, n_trivial=self.n_trivial, units=self.units,
                       time_units=self.time_units, compact_mode=self.compact_mode, description=self.description,
                       strict_parameters=self.strict_parameters)
 
     def rate_of(self, expression):
         """d/dt of ``expression`` (of the states and parameters) along the flow: grad(expression) . f."""
-        gradient = self.gradient_expressions([expression])
+        gradient = self.gradient_expressions([self._expression(expression, "rate_of")])
         return expand_integer_powers(hy.sum([g * f for g, f in zip(gradient, self.rhs)]))
+
+    def _expression(self, value, what: str):
+        """``value`` as a heyoka expression (numbers become constants); a one-line error for anything else."""
+        if isinstance(value, hy.expression):
+            return value
+        if isinstance(value, numbers.Real) and not isinstance(value, bool):
+            return hy.expression(float(value))
+        raise ParameterError(f"{what}: {value!r} is a {type(value).__name__}; give a heyoka expression of "
+                             f"{self.name}'s variables ({', '.join(self.state_names)}) and hy.par[i]")
 
     def parameter_index(self, name: str) -> int:
         if name not in self.parameter_names:
