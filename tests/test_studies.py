@@ -40,3 +40,21 @@ def test_fig17_study_inverts_the_disk(tmp_path):
 def test_unknown_study_is_a_clear_error(capsys):
     assert main(["study", "fig99"]) == 2
     assert "unknown study 'fig99'" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_the_highest_point_study_resumes_from_the_curves_it_finished(tmp_path, capsys):
+    """A second run reads each finished curve (same configuration) instead of rerunning it; a curve whose file is
+    gone is computed again."""
+    assert main(["study", "highest_point", "--quick", "--output-dir", str(tmp_path)]) == 0
+    first = capsys.readouterr().out
+    kept = tmp_path / "highest_point_eps0.1.nc"
+    stamp = kept.stat().st_mtime_ns
+    (tmp_path / "highest_point_drilled_e1.5mm.nc").unlink()
+    assert main(["study", "highest_point", "--quick", "--output-dir", str(tmp_path)]) == 0
+    second = capsys.readouterr().out
+    assert "read (same configuration)" not in first
+    assert "highest_point_eps0.1.nc: read (same configuration)" in second and kept.stat().st_mtime_ns == stamp
+    assert "highest_point_drilled_e1.5mm.nc: read" not in second
+    assert (tmp_path / "highest_point_drilled_e1.5mm.nc").exists()
+    assert td.load(kept).height.size == 9
