@@ -14,6 +14,7 @@ configuration is read, not rerun), highest_point_disks.nc and highest_point.png.
 
 from __future__ import annotations
 
+import json
 import sys
 from pathlib import Path
 
@@ -26,6 +27,7 @@ import tippedisk_analysis as td
 from tippedisk_analysis.analysis import critical_spin as cs
 from tippedisk_analysis.analysis import inversion
 from tippedisk_analysis.errors import DatasetError
+from tippedisk_analysis.parameters import InitialState
 from tippedisk_analysis.results import make_attrs
 
 SPINS = np.round(np.arange(31.5, 35.501, 0.025), 3)  # rad/s, Tables 1-2 disk
@@ -55,8 +57,8 @@ def curve(path: Path, model: str, setup, spins):
     """The curve's dataset: read from ``path`` when it holds this configuration, else computed and saved."""
     try:
         ds = td.load(path)
-        if (ds.attrs["config"] == inversion.highest_points(spins[:1], model=model, setup=setup).attrs["config"]
-                and np.array_equal(ds.spin.values, spins)):
+        config = inversion.highest_points_config(model, setup, InitialState().gamma, None)
+        if json.loads(ds.attrs["config"]) == config and np.array_equal(ds.spin.values, spins):
             print(f"{path.name}: read (same configuration)", flush=True)
             return ds
     except DatasetError:

@@ -69,6 +69,8 @@ def test_inside_the_friction_cone_the_slow_flow_gets_S_as_high_as_the_full_model
     sliding = inversion.with_eps(td.Setup(disk=disk), 0.01)
     slow = inversion.highest_point(35.04, model="slow", setup=sliding)
     assert slow.status == "cone" and slow.time == 0.0  # ends at the cone before S rises at all
+    curve = inversion.highest_points([35.04], model="slow", setup=sliding)
+    assert curve.attrs["status"] == "partial" and "friction cone" in curve.attrs["message"]  # not "completed"
     assert inversion.highest_point(35.04, setup=sliding).height > 0.2  # the full model slides and rises
 
 

@@ -38,6 +38,7 @@ from tqdm.auto import tqdm
 from .. import kinematics as kin
 from ..dynamics import Event, System
 from ..dynamics.poincare import crossings
+from ..dynamics.symmetric_families import finite_real
 from ..errors import ParameterError
 from ..models import held_spin, ode, reduced, slow_flow
 from ..parameters import InitialState, Setup
@@ -46,7 +47,8 @@ from ..results import make_attrs
 __all__ = ["MODELS", "INVERSION_HEIGHT", "Outcome", "Threshold", "horizon", "system", "start_state", "check_start",
            "parameters",
            "outcome", "spin_threshold", "with_eps", "threshold_dataset", "Highest", "height_system",
-           "highest_point", "highest_points", "ReductionCheck", "check_reduction"]
+           "highest_point", "highest_points", "highest_points_config", "ReductionCheck", "check_reduction",
+           "run_inputs"]
 
 MODELS = ("smooth", "slow", "held")
 INVERSION_HEIGHT = 0.8  # z_S > r + 0.8 e: S well above G
@@ -56,6 +58,7 @@ TOL = 1e-10  # Taylor tolerance of the runs
 REDUCTION_EPS = 0.01  # m/s: the slow flow is checked against ODE Model 1 here
 REDUCTION_TOL = 0.05  # (z_S - r) / e: the two highest points agree this well where the reduction holds
 NOT_INVERTING = ("horizon", "fell", "cone")
+EARLY_ENDS = ("cone", "lift_off", "nonfinite")  # a run that ends so stops before the horizon with its model invalid
 UNDECIDED = ("lift_off", "nonfinite")
 
 
@@ -153,26 +156,20 @@ def parameters(model: str, setup: Setup, spin: float | None = None) -> np.ndarra
     return np.array([values[name] for name in system(model).parameter_names])
 
 
-def _number(value, what: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
-        raise ParameterError(f"{what} = {value!r}: give a finite number")
-    return float(value)
-
-
 def run_inputs(spin, setup: Setup | None, gamma0, horizon_s) -> tuple[float, Setup, float, float]:
     """The checked inputs of one run from Table 3's start: the initial spin [rad/s] (positive: a negative one
     is its mirror image), the setup (default Tables 1-3), gamma0 [rad] and the horizon [s] (default
     :func:`horizon`); one-line ParameterErrors otherwise."""
-    spin = _number(spin, "spin")
+    spin = finite_real(spin, "spin")
     if spin <= 0:
         raise ParameterError(f"spin = {spin:g} rad/s: give a positive initial spin (a negative one is the mirror "
                              "image of the positive one)")
     setup = Setup() if setup is None else setup
     if not isinstance(setup, Setup):
         raise ParameterError(f"setup is a {type(setup).__name__}; give a Setup, e.g. Setup(disk=disk)")
-    gamma0 = InitialState().gamma if gamma0 is None else _number(gamma0, "gamma0")
+    gamma0 = InitialState().gamma if gamma0 is None else finite_real(gamma0, "gamma0")
     check_start(setup, gamma0)
-    t_end = horizon(setup.friction.eps) if horizon_s is None else _number(horizon_s, "horizon_s")
+    t_end = horizon(setup.friction.eps) if horizon_s is None else finite_real(horizon_s, "horizon_s")
     if not t_end > 0:
         raise ParameterError(f"horizon = {t_end} s must be positive")
     return spin, setup, gamma0, t_end
@@ -322,6 +319,12 @@ def check_reduction(spin: float, setup: Setup | None = None, gamma0: float | Non
     return ReductionCheck(*(highest_point(spin, model=m, setup=setup, gamma0=gamma0) for m in ("slow", "smooth")))
 
 
+def highest_points_config(model: str, setup: Setup, gamma0: float, horizon_s: float | None) -> dict:
+    """The ``config`` attribute of :func:`highest_points` for these inputs (a study compares it to resume)."""
+    return {"model": model, "setup": repr(setup), "gamma0": gamma0, "tol": TOL,
+            "horizon_s": horizon(setup.friction.eps) if horizon_s is None else float(horizon_s)}
+
+
 def highest_points(spins, *, model: str = "smooth", setup: Setup | None = None, gamma0: float | None = None,
                    horizon_s: float | None = None, progress: bool = False) -> xr.Dataset:
     """:func:`highest_point` at each of ``spins`` [rad/s] as a dataset (kind ``highest_point``, dim ``spin``)."""
@@ -346,15 +349,13 @@ def highest_points(spins, *, model: str = "smooth", setup: Setup | None = None, 
                     {"long_name": "how the run ended", "flag_values": np.arange(len(ended), dtype=np.int8),
                      "flag_meanings": " ".join(ended)})},
         coords={"spin": ("spin", spins, {"units": "rad s-1", "long_name": "initial spin alpha_dot(0)"})})
-    config = {"model": model, "setup": repr(setup), "gamma0": gamma0, "tol": TOL,
-              "horizon_s": horizon(setup.friction.eps) if horizon_s is None else float(horizon_s)}
-    undecided = sum(h.status in UNDECIDED for h in rows)
-    status = "partial" if undecided else "completed"
+    early = sum(h.status in EARLY_ENDS for h in rows)
+    status = "partial" if early else "completed"
     heights = ds.height.values
     message = (f"{len(rows)} runs; highest (z_S - r) / e from {heights.min():.4g} to {heights.max():.4g}"
-               + (f"; {undecided} run(s) ended by lift-off or a non-finite state (highest point up to there)"
-                  if undecided else ""))
-    ds.attrs = make_attrs("highest_point", config, status, message,
+               + (f"; {early} run(s) ended where the model stops being valid (the slow flow at the friction cone, "
+                  "lift-off, a non-finite state): their highest point is the one up to there" if early else ""))
+    ds.attrs = make_attrs("highest_point", highest_points_config(model, setup, gamma0, horizon_s), status, message,
                           title=f"Highest point of S from the Table 3 start over the initial spin ({model})")
     return ds
 
