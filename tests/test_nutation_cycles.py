@@ -125,6 +125,33 @@ def test_the_repelling_cycle_is_the_held_models_own_periodic_orbit(drift_30_5):
 
 
 @pytest.mark.slow
+def test_the_repelling_cycle_ends_in_a_fold_of_cycles_the_held_model_reaches_at_order_eps_squared():
+    """Above omega_c an attracting cycle comes in near the family's fold (2.39 rad) and meets the repelling one:
+    both vanish at one held spin (the drift's peak between them falls through zero). The held model's own
+    periodic orbit, continued in the held spin by shooting, turns at a fold of cycles there, closer by about 4
+    per halving of eps: two independent computations, the Melnikov drift (eps -> 0) and shooting at eps > 0."""
+    end = nc.repelling_cycle_end()
+    assert end["status"] == "completed" and 30.95 < end["spin"] < 30.96
+    below = nc.cycles(nc.drift(30.94, max_amplitude=3.1))
+    assert [c["kind"] for c in below["cycles"]] == ["repelling", "attracting"]
+    assert below["cycles"][0]["amplitude"] < end["amplitude"] < below["cycles"][1]["amplitude"] < 2.39
+    assert nc.cycles(nc.drift(30.96, max_amplitude=3.1))["status"] == "all_decay"
+    distances = []
+    for eps in (0.01, 0.005, 0.0025):
+        held = nc.held_fold_of_cycles(30.9, eps)
+        assert held["status"] == "completed", held["message"]
+        assert held["amplitude"] == pytest.approx(end["amplitude"], abs=0.02)
+        distances.append(held["spin"] - end["spin"])
+    assert distances[0] > 3 * distances[1] > 9 * distances[2] > 0 and distances[2] < 1e-4
+    assert nc.held_fold_of_cycles(30.0, 0.005)["status"] == "no_cycle"  # every nutation grows at 30 rad/s
+    assert nc.repelling_cycle_end(bracket=(31.0, 31.5))["status"] == "no_fold"
+    for call in (lambda: nc.held_fold_of_cycles(30.9, 0.0), lambda: nc.repelling_cycle_end(bracket=(31.0,)),
+                 lambda: nc.repelling_cycle_end(xtol=1.0)):
+        with pytest.raises(ParameterError):
+            call()
+
+
+@pytest.mark.slow
 def test_the_averaged_drift_follows_the_held_model(drift_30_5):
     """Runs of the held model (eps 0.01 m/s, 20 s) inside and outside the repelling cycle: the nutation decays and grows
     as d a / d(eps t) = drift(a) says, turning point by turning point."""

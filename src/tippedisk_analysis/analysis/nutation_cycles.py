@@ -31,10 +31,12 @@ import numpy as np
 import xarray as xr
 
 from scipy.integrate import solve_ivp
-from scipy.optimize import brentq
+from scipy.optimize import brentq, minimize_scalar
 
 from ..dynamics import Event, Options
 from ..dynamics.melnikov import drift_at, family_drift
+from ..dynamics.orbit_branches import continue_orbits
+from ..dynamics.orbits import find_orbit
 from ..dynamics.symmetric_families import Shooter, Shooting, symmetric_family
 from ..errors import ParameterError
 from ..models import held_spin
@@ -42,7 +44,8 @@ from ..parameters import Setup
 from . import critical_spin, inversion
 
 __all__ = ["SHOOTING", "EPS_PROBES", "family", "drift", "cycles", "repelling_cycle", "fold_of_cycles",
-           "amplitude_of", "orbit_amplitude", "averaged_amplitude", "homoclinic_spin"]
+           "repelling_cycle_end", "held_fold_of_cycles", "amplitude_of", "orbit_amplitude", "averaged_amplitude",
+           "homoclinic_spin"]
 
 _gamma = held_spin.rolling_system().variables[1]
 SHOOTING = Shooting(fixed={"beta": 0.5 * math.pi, "gamma_dot": 0.0}, vary="gamma", free="beta_dot",
@@ -260,6 +263,93 @@ def fold_of_cycles(setup: Setup | None = None, bracket: tuple | None = None, xto
         mid = 0.5 * (low + high)
         low, high = (low, mid) if has_cycles(mid) else (mid, high)
     return {"spin": 0.5 * (low + high), "low": low, "high": high, "status": "completed"}
+
+
+def _peak_rate(ds: xr.Dataset) -> tuple[float, float]:
+    """(largest d a / d(eps t) [rad/m] at an interior local maximum on the family's first branch, its amplitude
+    [rad]), refined between the neighbours of the largest member (members re-shot): where it is positive, the
+    nutation grows between two cycles, a repelling one below and an attracting one above. Without an interior
+    maximum, the largest checked member's; (nan, nan) without checked members."""
+    a, rate = amplitude_of(ds), ds.amplitude_rate.values
+    free = ds.start.sel(state=SHOOTING.free).values
+    first = np.flatnonzero(ds.fold.values)
+    end = int(first[0]) if first.size else len(a)
+    valid = ds.drift_valid.values.astype(bool)
+    peaks = [j for j in range(1, end - 1) if valid[j - 1:j + 2].all() and rate[j] >= max(rate[j - 1], rate[j + 1])]
+    if not peaks:  # the rate falls or rises all along: its largest checked member (no cycles pair there)
+        checked = np.flatnonzero(valid[:end])
+        if not checked.size:
+            return math.nan, math.nan
+        j = int(checked[np.argmax(rate[checked])])
+        return float(rate[j]), float(a[j])
+    j = max(peaks, key=lambda k: rate[k])
+
+    def minus_rate(x):
+        guess = np.interp(x, a[j - 1:j + 2], free[j - 1:j + 2])
+        value = _member(ds, x, guess)[0]
+        return -value if math.isfinite(value) else math.inf  # a member whose drift fails its checks never wins
+
+    found = minimize_scalar(minus_rate, bounds=(a[j - 1], a[j + 1]), method="bounded", options={"xatol": 1e-5})
+    return (float(-found.fun), float(found.x)) if -found.fun >= rate[j] else (float(rate[j]), float(a[j]))
+
+
+def repelling_cycle_end(setup: Setup | None = None, bracket: tuple = (30.9, 31.0), xtol: float = 1e-5) -> dict:
+    """The held spin [rad/s] above omega_c at which the repelling nutation cycle ends (eps -> 0): it meets an
+    attracting cycle that comes in near the family's own fold, and both vanish in a fold of cycles. Brent's method
+    on the largest rate between them (:func:`_peak_rate`), which is zero there; ``bracket`` (default for Tables
+    1-2) must hold its sign change. {"spin", "amplitude" (where the two cycles meet, rad), "status"}:
+    ``completed`` or ``no_fold`` (the bracket holds no sign change; also where the cycles meet at the family's
+    fold itself, where the drift fails its checks: :func:`held_fold_of_cycles` finds that fold)."""
+    low, high = _spins(bracket)
+    if not (isinstance(xtol, numbers.Real) and 0 < xtol < high - low):
+        raise ParameterError(f"xtol = {xtol!r}: give a positive tolerance [rad/s] smaller than the bracket")
+    known: dict = {}
+
+    def peak(spin):
+        if spin not in known:
+            known[spin] = _peak_rate(drift(spin, setup, max_amplitude=3.1))
+        return known[spin][0]
+
+    if not (peak(low) > 0 > peak(high)):
+        return {"spin": math.nan, "amplitude": math.nan, "status": "no_fold"}
+    spin = brentq(peak, low, high, xtol=xtol)
+    peak(spin)  # brentq's root is one of its evaluations, or else evaluated here
+    return {"spin": float(spin), "amplitude": known[spin][1], "status": "completed"}
+
+
+def held_fold_of_cycles(spin: float, eps: float, setup: Setup | None = None, *, max_points: int = 60) -> dict:
+    """The held model's own fold of cycles at friction ``eps`` [m/s]: its periodic orbit at ``spin`` [rad/s] next
+    to the repelling cycle of :func:`drift` (found by shooting), continued in the held spin
+    (``dy.continue_orbits``, shooting) up to its first fold of cycles. As eps -> 0 it tends to the fold of
+    :func:`repelling_cycle_end`. {"spin", "amplitude" [rad], "period" [s], "start_amplitude",
+    "status", "message"}: ``completed``, ``no_cycle`` (no repelling cycle at ``spin``), ``not_converged``
+    (shooting found no orbit) or ``no_fold`` (none within ``max_points`` orbits or 1 rad/s)."""
+    if isinstance(eps, bool) or not (isinstance(eps, numbers.Real) and 0 < eps < 0.1):
+        raise ParameterError(f"eps = {eps!r}: give the friction's smoothing eps in m/s, 0 < eps < 0.1")
+    ds = drift(spin, setup, max_amplitude=3.1)
+    star = repelling_cycle(ds)
+    failed = {"spin": math.nan, "amplitude": math.nan, "period": math.nan, "start_amplitude": math.nan}
+    if "amplitude" not in star:
+        return {**failed, "status": "no_cycle", "message": f"no repelling cycle at {spin:g} rad/s ({star['status']})"}
+    k = int(np.argmin(np.abs(amplitude_of(ds) - star["amplitude"])))
+    pars = _pars(spin, setup, eps)
+    orbit = find_orbit(held_spin.system(), ds.start.values[k], float(ds.period.values[k]), pars)
+    if not orbit.converged:
+        return {**failed, "status": "not_converged", "message": orbit.message}
+    start = orbit_amplitude(orbit.samples)
+    br, prob = continue_orbits(orbit, "spin", bounds={"spin": (spin - 1.0, spin + 1.0)}, method="shooting",
+                               options=Options(ds=0.02, ds_max=0.3, max_points=max_points))
+    folds = [sp for sp in br.special_points if sp.kind == "fold"]
+    if not folds:
+        return {**failed, "start_amplitude": start, "status": "no_fold", "message": br.message}
+    u = folds[0].u
+    system = held_spin.system()
+    ta = copy.deepcopy(system.taylor(1e-12))  # templates are shared
+    ta.time, ta.state[:] = 0.0, u[: prob.t_index]
+    ta.pars[:] = _pars(float(u[prob.t_index + 1]), setup, eps)[: len(ta.pars)]
+    states = ta.propagate_grid(np.linspace(0.0, float(u[prob.t_index]), 801))[-1]
+    return {"spin": float(u[prob.t_index + 1]), "amplitude": orbit_amplitude(states), "period": float(u[prob.t_index]),
+            "start_amplitude": start, "status": "completed", "message": br.message}
 
 
 MANIFOLD_OFFSET = 1e-8  # start of the unstable manifold: this far from the lower spin along its eigenvector
