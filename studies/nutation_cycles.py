@@ -5,7 +5,9 @@ cycle above it that bounds the nutations the inverted spin damps (docs/inversion
 
 For held spins around omega_c (Tables 1-2 disk) computes the nutation family of the rolling held model (eps = 0),
 each orbit's Melnikov drift under friction (analysis/nutation_cycles.py), and the amplitudes where the drift
-changes sign: the nutation cycles. Locates the fold of cycles below omega_c; checks the repelling cycle against
+changes sign: the nutation cycles. Locates the fold of cycles below omega_c and the one above it where the
+repelling cycle ends, the latter also as the held model's own fold of cycles (continued by shooting); checks the
+repelling cycle against
 the held model's own periodic orbit at eps = 0.005 m/s (shooting), and the drift against runs of the held
 model at eps = 0.01 m/s. Writes nutation_cycles.nc (the repelling cycle over the held spin),
 nutation_family_30.5.nc (the family at 30.5 rad/s with its drift, kind symmetric_family) and nutation_cycles.png.
@@ -37,6 +39,7 @@ ORBIT_EPS = 0.005  # m/s: the held model's own cycle, found by shooting
 RUN_EPS = 0.01  # m/s: runs of the held model against the drift
 RUN_SLOW_TIME = 0.4  # m: eps t of each run
 RUN_OFFSET = 0.3  # rad: the runs start this far inside and outside the repelling cycle
+END_FROM = 30.9  # rad/s: the held model's repelling cycle is continued from here to its fold of cycles
 ZOOM_SPINS = (30.2285, 30.229, 30.2295, 30.230, 30.231, 30.232, 30.2325, 30.234, 30.236)  # rad/s: near the fold
 
 
@@ -70,7 +73,7 @@ def held_run(ds: xr.Dataset, spin: float, amplitude: float) -> dict:
             "averaged": nc.averaged_amplitude(ds, a[k], RUN_EPS * times[turns])}
 
 
-def curve_dataset(rows: list, spins_without: list, fold: dict) -> xr.Dataset:
+def curve_dataset(rows: list, spins_without: list, fold: dict, end: dict | None) -> xr.Dataset:
     """The repelling cycle a*(Omega) over the held spins where it exists (kind nutation_cycles)."""
     ds = xr.Dataset({
         "repelling_amplitude": ("spin", [r["amplitude"] for r in rows], {"units": "rad", "long_name":
@@ -87,8 +90,16 @@ def curve_dataset(rows: list, spins_without: list, fold: dict) -> xr.Dataset:
     message = (f"a repelling nutation cycle at {len(rows)} held spins; none at {without}" if without else
                f"a repelling nutation cycle at {len(rows)} held spins")
     message += f"; the fold of cycles at {fold['spin']:.4f} rad/s ({fold['status']})"
+    ends = {}
+    if end is not None:
+        averaged, held = end["averaged"], end["held"]
+        message += (f"; the repelling cycle ends at {averaged['spin']:.6f} rad/s, a = {averaged['amplitude']:.4f} rad "
+                    f"({averaged['status']}); the held model's fold of cycles at eps {ORBIT_EPS:g}: "
+                    f"{held['spin']:.6f} rad/s ({held['status']})")
+        pairs = (("repelling_cycle_end", averaged), ("held_fold_of_cycles", held))
+        ends = {name: found["spin"] for name, found in pairs if found["status"] == "completed"}
     ds.attrs = make_attrs("nutation_cycles", {"spins": [r["spin"] for r in rows], "orbit_eps": ORBIT_EPS},
-                          "completed", message, model=held_spin.system().name, fold_of_cycles=fold["spin"])
+                          "completed", message, model=held_spin.system().name, fold_of_cycles=fold["spin"], **ends)
     return ds
 
 
@@ -101,7 +112,7 @@ def zoom(spins) -> list:
     return found
 
 
-def figure(families: dict, rows: list, runs: list, near: list, fold: dict, path: Path) -> None:
+def figure(families: dict, rows: list, runs: list, near: list, fold: dict, end: dict | None, path: Path) -> None:
     fig, ax = plt.subplots(1, 3, figsize=(15, 4.4))
     critical = cs.omega_critical()
     colors = plt.cm.viridis(np.linspace(0.0, 0.9, len(families)))
@@ -126,9 +137,14 @@ def figure(families: dict, rows: list, runs: list, near: list, fold: dict, path:
     ax[1].plot([critical.omega_critical, every.max()], [0, 0], "b-", lw=3, label="inverted spin, nutation decays")
     ax[1].plot([every.min(), critical.omega_critical], [0, 0], "b:", lw=3, label="inverted spin, nutation grows")
     ax[1].axvline(critical.omega_critical, color="k", ls=":", label=r"$\omega_c$ (C4): the Hopf point")
-    ax[1].set(xlabel=r"held spin $\Omega$ [rad/s]", ylabel="a [rad]", ylim=(0, 2.6),
+    if end is not None:
+        ax[1].plot(end["averaged"]["spin"], end["averaged"]["amplitude"], "rx", ms=8,
+                   label=f"the cycle ends at a fold of cycles, {end['averaged']['spin']:.4f} rad/s")
+        ax[1].plot(end["held"]["spin"], end["held"]["amplitude"], "k+", ms=8,
+                   label=rf"the held model's fold of cycles, $\varepsilon$ = {ORBIT_EPS:g} m/s")
+    ax[1].set(xlabel=r"held spin $\Omega$ [rad/s]", ylabel="a [rad]", ylim=(0, 3.4),
               title="the cycles that bound the damped nutations")
-    inset = ax[1].inset_axes([0.58, 0.42, 0.38, 0.38])
+    inset = ax[1].inset_axes([0.6, 0.09, 0.37, 0.3])
     for kind, style in (("attracting", "r-"), ("repelling", "r--")):
         pts = sorted((s_, a_) for s_, k_, a_ in near if k_ == kind)
         inset.plot([p[0] for p in pts], [p[1] for p in pts], style, marker=".", ms=3, label=kind)
@@ -158,7 +174,9 @@ def figure(families: dict, rows: list, runs: list, near: list, fold: dict, path:
                    label=rf"held model, $\varepsilon$ = {RUN_EPS:g}, a = {run['measured'][0]:.2f}")
     ax[2].set(xlabel=r"$\gamma$ [rad]", ylabel=r"$\dot\gamma$ [rad/s]",
               title=f"{PORTRAIT_SPIN:g} rad/s: the family (grey) and two runs")
-    finish(fig, ax, path, fontsize=7)
+    ax[1].legend(fontsize=6, loc="upper left")  # the inset takes the lower right
+    ax[1].grid(alpha=0.3)
+    finish(fig, ax[::2], path, fontsize=7)
 
 
 def main(output_dir: str = "output", quick: bool = False) -> Path:
@@ -186,6 +204,11 @@ def main(output_dir: str = "output", quick: bool = False) -> Path:
             rows.append({"spin": spin, **repelling, "fold": fold, "held": held})
     fold = nc.fold_of_cycles()
     print(f"fold of cycles: {fold}; omega_c {cs.omega_critical().omega_critical:.6f} rad/s", flush=True)
+    end = None
+    if not quick:
+        end = {"averaged": nc.repelling_cycle_end(), "held": nc.held_fold_of_cycles(END_FROM, ORBIT_EPS)}
+        print(f"the repelling cycle ends: {end['averaged']}; the held model at eps {ORBIT_EPS:g} from {END_FROM:g} "
+              f"rad/s: {end['held']}", flush=True)
     near = zoom(ZOOM_SPINS[::4] if quick else ZOOM_SPINS)
     for spin, kind, amplitude in near:
         print(f"  {spin:g} rad/s: {kind} cycle at a = {amplitude:.4f} rad", flush=True)
@@ -197,9 +220,9 @@ def main(output_dir: str = "output", quick: bool = False) -> Path:
               f"eps t = {RUN_SLOW_TIME:g} m a = {run['measured'][-1]:.4f} rad, the averaged drift gives "
               f"{run['averaged'][-1]:.4f} rad (largest difference "
               f"{np.abs(run['measured'] - run['averaged']).max():.4f} rad)", flush=True)
-    curve = td.save(curve_dataset(rows, without, fold), out / "nutation_cycles.nc")
+    curve = td.save(curve_dataset(rows, without, fold, end), out / "nutation_cycles.nc")
     td.save(portrait, out / f"nutation_family_{PORTRAIT_SPIN:g}.nc")
-    figure(families, rows, runs, near, fold, curve.with_name("nutation_cycles.png"))
+    figure(families, rows, runs, near, fold, end, curve.with_name("nutation_cycles.png"))
     return curve
 
 
