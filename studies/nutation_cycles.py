@@ -142,7 +142,7 @@ def figure(families: dict, rows: list, runs: list, near: list, fold: dict, end: 
                    label=f"the cycle ends at a fold of cycles, {end['averaged']['spin']:.4f} rad/s")
         ax[1].plot(end["held"]["spin"], end["held"]["amplitude"], "k+", ms=8,
                    label=rf"the held model's fold of cycles, $\varepsilon$ = {ORBIT_EPS:g} m/s")
-    ax[1].set(xlabel=r"held spin $\Omega$ [rad/s]", ylabel="a [rad]", ylim=(0, 3.4),
+    ax[1].set(xlabel=r"held spin $\Omega$ [rad/s]", ylabel="a [rad]", ylim=(0, 3.9),
               title="the cycles that bound the damped nutations")
     inset = ax[1].inset_axes([0.6, 0.09, 0.37, 0.3])
     for kind, style in (("attracting", "r-"), ("repelling", "r--")):
