@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import copy
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -122,6 +123,31 @@ def test_the_repelling_cycle_is_the_held_models_own_periodic_orbit(drift_30_5):
         family = real[np.argsort(np.abs(real - 1))[1]]
         assert math.log(family) / (eps * orbit.period) == pytest.approx(slope, rel=0.05)
     assert errors[1] < 2e-3 and errors[1] < errors[0]
+
+
+def test_the_fold_of_the_drift_checks_itself_and_refuses_a_jump(monkeypatch):
+    """repelling_cycle_end roots the drift's peak between two cycles. A peak that falls through zero smoothly is
+    a fold; one that jumps (another member of the family takes over, as next to members whose drift fails its
+    checks) has a sign change and no fold, and must not be reported as completed."""
+    monkeypatch.setattr(nc, "drift", lambda spin, setup, max_amplitude: spin)
+    monkeypatch.setattr(nc, "_peak_rate", lambda spin: (-6.0 * (spin - 30.95), 2.3 + 0.1 * (spin - 30.95), True))
+    smooth = nc.repelling_cycle_end(bracket=(30.9, 31.0))
+    assert smooth["status"] == "completed" and smooth["spin"] == pytest.approx(30.95, abs=1e-5)
+    monkeypatch.setattr(nc, "_peak_rate", lambda spin: (5.4, 2.33, True) if spin < 30.95 else (-0.35, 1.99, False))
+    jump = nc.repelling_cycle_end(bracket=(30.9, 31.0))
+    assert jump["status"] == "not_verified" and math.isnan(jump["spin"]) and "jump" in jump["message"]
+
+
+def test_the_held_fold_refuses_an_orbit_shooting_found_off_the_cycle(drift_30_5, monkeypatch):
+    """If shooting from the family member next to a* converges to another orbit, the branch continued from it is
+    not the repelling cycle's: status off_cycle, no fold reported."""
+    star = nc.repelling_cycle(drift_30_5)["amplitude"]
+    monkeypatch.setattr(nc, "drift", lambda spin, setup, max_amplitude: drift_30_5)
+    off = np.tile([0.5 * math.pi, 0.5 * math.pi - star - 0.1, 0.0, 0.0], (10, 1))
+    monkeypatch.setattr(nc, "find_orbit", lambda *args: SimpleNamespace(converged=True, samples=off))
+    found = nc.held_fold_of_cycles(30.5, 0.005)
+    assert found["status"] == "off_cycle" and math.isnan(found["spin"])
+    assert found["start_amplitude"] == pytest.approx(star + 0.1)
 
 
 @pytest.mark.slow

@@ -265,11 +265,12 @@ def fold_of_cycles(setup: Setup | None = None, bracket: tuple | None = None, xto
     return {"spin": 0.5 * (low + high), "low": low, "high": high, "status": "completed"}
 
 
-def _peak_rate(ds: xr.Dataset) -> tuple[float, float]:
+def _peak_rate(ds: xr.Dataset) -> tuple[float, float, bool]:
     """(largest d a / d(eps t) [rad/m] at an interior local maximum on the family's first branch, its amplitude
-    [rad]), refined between the neighbours of the largest member (members re-shot): where it is positive, the
-    nutation grows between two cycles, a repelling one below and an attracting one above. Without an interior
-    maximum, the largest checked member's; (nan, nan) without checked members."""
+    [rad], True), refined between the neighbours of the largest member (members re-shot): where it is positive,
+    the nutation grows between two cycles, a repelling one below and an attracting one above. Without an
+    interior maximum, (the largest checked member's rate, its amplitude, False); (nan, nan, False) without
+    checked members."""
     a, rate = amplitude_of(ds), ds.amplitude_rate.values
     free = ds.start.sel(state=SHOOTING.free).values
     first = np.flatnonzero(ds.fold.values)
@@ -279,9 +280,9 @@ def _peak_rate(ds: xr.Dataset) -> tuple[float, float]:
     if not peaks:  # the rate falls or rises all along: its largest checked member (no cycles pair there)
         checked = np.flatnonzero(valid[:end])
         if not checked.size:
-            return math.nan, math.nan
+            return math.nan, math.nan, False
         j = int(checked[np.argmax(rate[checked])])
-        return float(rate[j]), float(a[j])
+        return float(rate[j]), float(a[j]), False
     j = max(peaks, key=lambda k: rate[k])
 
     def minus_rate(x):
@@ -290,16 +291,24 @@ def _peak_rate(ds: xr.Dataset) -> tuple[float, float]:
         return -value if math.isfinite(value) else math.inf  # a member whose drift fails its checks never wins
 
     found = minimize_scalar(minus_rate, bounds=(a[j - 1], a[j + 1]), method="bounded", options={"xatol": 1e-5})
-    return (float(-found.fun), float(found.x)) if -found.fun >= rate[j] else (float(rate[j]), float(a[j]))
+    if -found.fun >= rate[j]:
+        return float(-found.fun), float(found.x), True
+    return float(rate[j]), float(a[j]), True
+
+
+PEAK_JUMP = 0.05  # rad/m and rad: the peak's rate and amplitude may change at most this much across a fold
 
 
 def repelling_cycle_end(setup: Setup | None = None, bracket: tuple = (30.9, 31.0), xtol: float = 1e-5) -> dict:
-    """The held spin [rad/s] above omega_c at which the repelling nutation cycle ends (eps -> 0): it meets an
-    attracting cycle that comes in near the family's own fold, and both vanish in a fold of cycles. Brent's method
-    on the largest rate between them (:func:`_peak_rate`), which is zero there; ``bracket`` (default for Tables
-    1-2) must hold its sign change. {"spin", "amplitude" (where the two cycles meet, rad), "status"}:
-    ``completed`` or ``no_fold`` (the bracket holds no sign change; also where the cycles meet at the family's
-    fold itself, where the drift fails its checks: :func:`held_fold_of_cycles` finds that fold)."""
+    """The held spin [rad/s] above omega_c at which the repelling nutation cycle meets an attracting cycle above
+    it and both vanish: a fold of cycles of the drift (eps -> 0). Brent's method on the largest rate between the
+    two (:func:`_peak_rate`), which falls through zero there; ``bracket`` (default for Tables 1-2) must hold that
+    sign change. Checks itself: 2 xtol either side of the root the peak is an interior maximum of the rate, of
+    opposite signs, and moves by less than PEAK_JUMP. {"spin", "amplitude" (where the two cycles meet, rad),
+    "status", "message"}: ``completed``; ``no_fold`` (the bracket holds no sign change: also where the cycles meet
+    at the family's fold itself, where the drift fails its checks, or where an attracting cycle below meets the
+    repelling one); ``not_verified`` (the sign change is a jump, not a fold). :func:`held_fold_of_cycles`
+    finds the held model's own fold without the drift's."""
     low, high = _spins(bracket)
     if not (isinstance(xtol, numbers.Real) and 0 < xtol < high - low):
         raise ParameterError(f"xtol = {xtol!r}: give a positive tolerance [rad/s] smaller than the bracket")
@@ -310,20 +319,36 @@ def repelling_cycle_end(setup: Setup | None = None, bracket: tuple = (30.9, 31.0
             known[spin] = _peak_rate(drift(spin, setup, max_amplitude=3.1))
         return known[spin][0]
 
-    if not (peak(low) > 0 > peak(high)):
-        return {"spin": math.nan, "amplitude": math.nan, "status": "no_fold"}
+    failed = {"spin": math.nan, "amplitude": math.nan}
+    at_low, at_high = peak(low), peak(high)
+    if not (at_low > 0 > at_high):
+        return {**failed, "status": "no_fold", "message": f"the drift's peak does not fall through zero over "
+                f"{low:g}-{high:g} rad/s ({at_low:.4g} and {at_high:.4g} rad/m at the ends)"}
     spin = brentq(peak, low, high, xtol=xtol)
+    sides = [max(low, spin - 2 * xtol), min(high, spin + 2 * xtol)]
+    for side in sides:
+        peak(side)
+    (rate_low, a_low, inner_low), (rate_high, a_high, inner_high) = known[sides[0]], known[sides[1]]
+    sides_text = (f"the peak goes from {rate_low:.4g} rad/m at a = {a_low:.4g} rad to {rate_high:.4g} rad/m at "
+                  f"a = {a_high:.4g} rad across {spin:.8g} rad/s")
+    if not (inner_low and inner_high and rate_low >= 0 >= rate_high and abs(rate_low - rate_high) < PEAK_JUMP
+            and abs(a_low - a_high) < PEAK_JUMP):
+        return {**failed, "status": "not_verified", "message": f"{sides_text}: a jump, not a fold of cycles"}
     peak(spin)  # brentq's root is one of its evaluations, or else evaluated here
-    return {"spin": float(spin), "amplitude": known[spin][1], "status": "completed"}
+    return {"spin": float(spin), "amplitude": known[spin][1], "status": "completed", "message": sides_text}
+
+
+START_TOL = 0.02  # rad: the held model's orbit must start this close to the drift's repelling cycle
 
 
 def held_fold_of_cycles(spin: float, eps: float, setup: Setup | None = None, *, max_points: int = 60) -> dict:
     """The held model's own fold of cycles at friction ``eps`` [m/s]: its periodic orbit at ``spin`` [rad/s] next
-    to the repelling cycle of :func:`drift` (found by shooting), continued in the held spin
-    (``dy.continue_orbits``, shooting) up to its first fold of cycles. As eps -> 0 it tends to the fold of
-    :func:`repelling_cycle_end`. {"spin", "amplitude" [rad], "period" [s], "start_amplitude",
-    "status", "message"}: ``completed``, ``no_cycle`` (no repelling cycle at ``spin``), ``not_converged``
-    (shooting found no orbit) or ``no_fold`` (none within ``max_points`` orbits or 1 rad/s)."""
+    to the repelling cycle of :func:`drift` (found by shooting; it must lie within START_TOL of it), continued
+    in the held spin (``dy.continue_orbits``, shooting) up to its first fold of cycles. Where the drift's fold
+    is located (:func:`repelling_cycle_end`) it tends to it as eps -> 0 (for Tables 1-2 at O(eps^2)).
+    {"spin", "amplitude" [rad], "period" [s], "start_amplitude", "status", "message"}: ``completed``,
+    ``no_cycle`` (no repelling cycle at ``spin``), ``not_converged`` (shooting found no orbit), ``off_cycle`` (it
+    found another orbit) or ``no_fold`` (none within ``max_points`` orbits or 1 rad/s)."""
     if isinstance(eps, bool) or not (isinstance(eps, numbers.Real) and 0 < eps < 0.1):
         raise ParameterError(f"eps = {eps!r}: give the friction's smoothing eps in m/s, 0 < eps < 0.1")
     ds = drift(spin, setup, max_amplitude=3.1)
@@ -337,6 +362,9 @@ def held_fold_of_cycles(spin: float, eps: float, setup: Setup | None = None, *, 
     if not orbit.converged:
         return {**failed, "status": "not_converged", "message": orbit.message}
     start = orbit_amplitude(orbit.samples)
+    if abs(start - star["amplitude"]) > START_TOL:
+        return {**failed, "start_amplitude": start, "status": "off_cycle", "message": f"shooting found an orbit at "
+                f"a = {start:.4f} rad, not the repelling cycle at a* = {star['amplitude']:.4f} rad; try another spin"}
     br, prob = continue_orbits(orbit, "spin", bounds={"spin": (spin - 1.0, spin + 1.0)}, method="shooting",
                                options=Options(ds=0.02, ds_max=0.3, max_points=max_points))
     folds = [sp for sp in br.special_points if sp.kind == "fold"]
@@ -349,7 +377,9 @@ def held_fold_of_cycles(spin: float, eps: float, setup: Setup | None = None, *, 
     ta.pars[:] = _pars(float(u[prob.t_index + 1]), setup, eps)[: len(ta.pars)]
     states = ta.propagate_grid(np.linspace(0.0, float(u[prob.t_index]), 801))[-1]
     return {"spin": float(u[prob.t_index + 1]), "amplitude": orbit_amplitude(states), "period": float(u[prob.t_index]),
-            "start_amplitude": start, "status": "completed", "message": br.message}
+            "start_amplitude": start, "status": "completed",
+            "message": f"the first fold of cycles on the held model's branch from {spin:g} rad/s, orbit "
+                       f"{folds[0].index} of {len(br.points)}"}
 
 
 MANIFOLD_OFFSET = 1e-8  # start of the unstable manifold: this far from the lower spin along its eigenvector
