@@ -7,9 +7,8 @@ For held spins around omega_c (Tables 1-2 disk) computes the nutation family of 
 each orbit's Melnikov drift under friction (analysis/nutation_cycles.py), and the amplitudes where the drift
 changes sign: the nutation cycles. Locates the fold of cycles below omega_c and the one above it where the
 repelling cycle ends, the latter also as the held model's own fold of cycles (continued by shooting); checks the
-repelling cycle against
-the held model's own periodic orbit at eps = 0.005 m/s (shooting), and the drift against runs of the held
-model at eps = 0.01 m/s. Writes nutation_cycles.nc (the repelling cycle over the held spin),
+repelling cycle against the held model's own periodic orbit at eps = 0.005 m/s (shooting), and the drift against
+runs of the held model at eps = 0.01 m/s. Writes nutation_cycles.nc (the repelling cycle over the held spin),
 nutation_family_30.5.nc (the family at 30.5 rad/s with its drift, kind symmetric_family) and nutation_cycles.png.
 """
 
