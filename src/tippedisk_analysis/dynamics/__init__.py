@@ -25,6 +25,8 @@ _PUBLIC = {
     "PeriodicOrbit": "orbit_base", "orbit_problem": "orbit_branches", "continue_orbits": "orbit_branches",
     "hopf_start": "orbit_branches", "hopf_branch": "orbit_branches", "orbit_branch": "orbit_branches",
     "switch_period_doubling": "orbit_branches", "homoclinic_limit": "orbit_branches",
+    "manifold_return": "homoclinic", "homoclinic_point": "homoclinic", "homoclinic_scan": "homoclinic",
+    "homoclinic_curve": "homoclinic",
     "Shooting": "symmetric_families", "symmetric_family": "symmetric_families", "family_drift": "melnikov",
     "drift_at": "melnikov",
     "branch_dataset": "orbit_datasets", "orbits_dataset": "orbit_datasets", "orbit_from_dataset": "orbit_datasets",

@@ -1,0 +1,96 @@
+"""Homoclinic orbits by the side on which a one-dimensional manifold leaves its saddle again
+(tippedisk_analysis.dynamics.homoclinic), on systems with known answers."""
+
+import math
+
+import heyoka as hy
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+from tippedisk_analysis import dynamics as dy
+from tippedisk_analysis.dynamics import homoclinic as hc
+from tippedisk_analysis.errors import ParameterError
+
+
+def _loop(shifted: bool = False) -> dy.System:
+    """The catalogue's Hamiltonian loop with energy-selecting damping, y' = x - x^2 - y (H - c - d): the level
+    H = c + d is invariant, so the saddle's loop H = 0 is a homoclinic orbit exactly on the line c = -d."""
+    x, y = hy.make_vars("x", "y")
+    H = y * y / 2 - x * x / 2 + x * x * x / 3
+    return dy.System("loop_cd", (x, y), (y, x - x * x - y * (H - hy.par[0] - hy.par[1])), {"c": -0.1, "d": 0.0})
+
+
+def test_the_loop_of_the_textbook_system_is_found_at_c_0():
+    loop = dy.textbook_system("homoclinic")
+    found = hc.homoclinic_point(loop, (0.0, 0.0), "c", (-0.05, 0.08))
+    assert found["status"] == "completed", found["message"]
+    assert abs(found["value"]) < 1e-9
+    assert found["lambda_1"] == pytest.approx(1.0)
+    assert found["stay"] > hc.STAY_FACTOR  # lambda_1 = 1
+    # the other branch of the unstable manifold runs off to x -> -infinity on both sides of c = 0
+    assert hc.homoclinic_point(loop, (0.0, 0.0), "c", (-0.05, 0.08), branch=-1)["status"] == "no_crossing"
+
+
+def test_the_homoclinic_curve_of_a_two_parameter_loop_is_the_line_c_minus_d():
+    ds = hc.homoclinic_curve(_loop(), (0.0, 0.0), "c", "d", np.linspace(0.0, 0.05, 4), (-0.02, 0.03))
+    assert list(ds.status.values) == ["completed"] * 4
+    np.testing.assert_allclose(ds.c.values, -ds.d.values, atol=1e-9)
+
+
+def _ab_saddle(D: float) -> tuple[float, float]:
+    """The middle equilibrium (a saddle) of AUTO-07p's demo 'ab' (B = 14, beta = 2), from u2 alone."""
+    def u1(u2):
+        return D * math.exp(u2) / (1 + D * math.exp(u2))
+    u2 = brentq(lambda u: -u + 14.0 * u1(u) - 2.0 * u, 1.5, 3.0)
+    return u1(u2), u2
+
+
+def test_the_homoclinic_limit_of_auto_demo_ab_is_auto07ps():
+    """AUTO-07p's demo 'ab' continues its periodic orbits to a homoclinic limit at D = 0.10550707 (the period
+    grows without bound); here the saddle's unstable manifold returns to it at the same D."""
+    ab = dy.textbook_system("ab")
+    found = hc.homoclinic_point(ab, _ab_saddle(0.104), "D", (0.100, 0.1057), ab.with_pars(D=0.104))
+    assert found["status"] == "completed", found["message"]
+    assert found["value"] == pytest.approx(0.10550707, abs=5e-9)
+
+
+def test_the_lorenz_homoclinic_explosion_is_at_rho_13_9265574():
+    """sigma = 10, beta = 8/3: the origin's unstable manifold returns to it at rho = 13.9265574 (literature);
+    a scan over rho 5-20 finds that one crossing, and only it."""
+    lorenz = dy.textbook_system("lorenz")
+    found = hc.homoclinic_point(lorenz, (0.0, 0.0, 0.0), "rho", (10.0, 20.0), lorenz.with_pars(rho=10.0))
+    assert found["status"] == "completed", found["message"]
+    assert found["value"] == pytest.approx(13.9265574, abs=1e-6)
+    scan = hc.homoclinic_scan(lorenz, (0.0, 0.0, 0.0), "rho", np.arange(5.0, 20.1, 1.0), lorenz.with_pars(rho=5.0))
+    assert list(scan.crossing_status.values) == ["completed"]
+    assert scan.crossing_value.values[0] == pytest.approx(found["value"], abs=1e-8)
+
+
+def test_a_change_of_side_that_is_a_jump_is_refused():
+    """In Lorenz's chaotic range the branch's side at its closest approach changes between rho = 25 and 26 without
+    the branch coming back to the origin: no homoclinic orbit, and the check says so."""
+    lorenz = dy.textbook_system("lorenz")
+    found = hc.homoclinic_point(lorenz, (0.0, 0.0, 0.0), "rho", (25.0, 26.0), lorenz.with_pars(rho=25.0))
+    assert found["status"] == "not_verified"
+    assert "no_return" in found["message"]
+
+
+def _no_equilibrium() -> dy.System:
+    x, y = hy.make_vars("x", "y")
+    return dy.System("no_equilibrium", (x, y), (hy.par[0] + x * x, -y), {"a": 1.0})
+
+
+def test_bad_input_is_refused_in_one_line():
+    lorenz = dy.textbook_system("lorenz")
+    origin = (0.0, 0.0, 0.0)
+    calls = {"manifold": lambda: hc.manifold_return(lorenz, origin, manifold="sideways"),
+             "branch": lambda: hc.manifold_return(lorenz, origin, branch="+w"),
+             "two numbers": lambda: hc.homoclinic_point(lorenz, origin, "rho", (10.0,)),
+             "low < high": lambda: hc.homoclinic_point(lorenz, origin, "rho", (20.0, 10.0)),
+             "finite numbers": lambda: hc.homoclinic_scan(lorenz, origin, "rho", [10.0, math.nan]),
+             "2-dimensional": lambda: hc.manifold_return(lorenz, origin, manifold="stable"),
+             "no equilibrium": lambda: hc.manifold_return(_no_equilibrium(), (0.0, 0.0))}
+    for words, call in calls.items():
+        with pytest.raises(ParameterError, match=words):
+            call()
