@@ -86,7 +86,7 @@ def test_bad_input_is_refused_in_one_line():
     origin = (0.0, 0.0, 0.0)
     calls = {"manifold": lambda: hc.manifold_return(lorenz, origin, manifold="sideways"),
              "branch": lambda: hc.manifold_return(lorenz, origin, branch="+w"),
-             "two numbers": lambda: hc.homoclinic_point(lorenz, origin, "rho", (10.0,)),
+             "pair": lambda: hc.homoclinic_point(lorenz, origin, "rho", (10.0,)),
              "low < high": lambda: hc.homoclinic_point(lorenz, origin, "rho", (20.0, 10.0)),
              "finite numbers": lambda: hc.homoclinic_scan(lorenz, origin, "rho", [10.0, math.nan]),
              "2-dimensional": lambda: hc.manifold_return(lorenz, origin, manifold="stable"),

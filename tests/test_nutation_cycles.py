@@ -227,6 +227,29 @@ def test_the_lower_spins_homoclinic_orbit_returns_to_it():
     assert nc.homoclinic_spin(bracket=(30.0, 31.0))["status"] == "no_crossing"
 
 
+def test_the_generic_homoclinic_method_finds_the_reversors_orbit_at_eps_0():
+    """dy.homoclinic_point (the unstable manifold's return to the lower spin, gamma once round) and the reversor
+    condition (beta_dot = 0 at the top) are two different conditions; at eps = 0 both give the same spin. The
+    lower spin is a saddle-centre there, so the generic method says not_hyperbolic."""
+    found = dy.homoclinic_point(held_spin.rolling_system(), held_spin.spin_state("lower"), "spin", (33.4, 33.5),
+                                nc._pars(33.4, None), branch="+gamma", shift=(0.0, 2.0 * math.pi, 0.0, 0.0))
+    assert found["status"] == "not_hyperbolic"
+    assert found["value"] == pytest.approx(nc.homoclinic_spin()["spin"], abs=1e-8)
+
+
+def test_with_friction_the_lower_spin_has_one_homoclinic_orbit():
+    """eps = 0.005 m/s: the lower spin's stable manifold is one-dimensional (its precession grows), and followed
+    backwards it comes back to the lower spin at one held spin only, a checked homoclinic orbit."""
+    w = np.linalg.eigvals(held_spin.system().jacobian(held_spin.spin_state("lower"), nc._pars(30.8, None, 0.005)))
+    assert np.sum(w.real < 0) == 1 and np.sum((w.real > 0) & (np.abs(w.imag) > 1)) == 2
+    scan = nc.lower_spin_scan(0.005, spins=(30.5, 30.75, 31.0, 32.0, 34.0))
+    assert list(scan.side.values) == [-1, -1, 1, 1, 1]
+    assert list(scan.crossing_status.values) == ["completed"] and scan.attrs["homoclinic_orbits"] == 1
+    assert scan.crossing_value.values[0] == pytest.approx(30.81545, abs=1e-4)
+    with pytest.raises(ParameterError, match="homoclinic_spin"):
+        nc.lower_spin_scan(0.0)
+
+
 def test_on_the_r60_disk_the_hopf_point_is_subcritical():
     """The drilled disk with r = 60 mm has no cycle just below its omega_c, and its repelling cycle grows out of the
     spin above it like the square root of the distance to omega_c (a subcritical Hopf point)."""

@@ -6,7 +6,7 @@ from tippedisk_analysis.cli import main, study
 STUDIES = study.names()
 SLOW_STUDIES = {"basins", "continuation", "critical_spin", "fig09_10_coulomb_contensou", "held_spin", "highest_point",
                 "lyapunov_map",
-                "free_nutation", "nutation_cycles", "periodic_orbits", "rolling"}  # > 1 s
+                "free_nutation", "lower_spin_homoclinic", "nutation_cycles", "periodic_orbits", "rolling"}  # > 1 s
 
 
 def test_study_list_names_every_study_with_its_summary(capsys):

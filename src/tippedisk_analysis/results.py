@@ -48,7 +48,8 @@ KIND_TITLES = {"simulation": "Simulation", "continuation": "Continuation", "peri
                "outcome_map": "Outcome map", "stability_map": "Stability map", "bifurcation": "Bifurcation diagram",
                "spin_passage": "Passage along the inverted spins",
                "symmetric_family": "Family of symmetric periodic orbits",
-               "nutation_cycles": "Nutation cycles of the held-spin model"}
+               "nutation_cycles": "Nutation cycles of the held-spin model",
+               "homoclinic_orbits": "Homoclinic orbits"}
 
 # name: (units, long_name)
 VARIABLES: dict[str, tuple[str, str]] = {

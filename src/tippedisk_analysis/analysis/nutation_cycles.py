@@ -17,7 +17,9 @@ cycles just below omega_c (:func:`fold_of_cycles`), where it meets the small att
 
 The lower spin (S below G) is a saddle-centre of the rolling held model. At one held spin its unstable
 manifold reaches the top with beta_dot = 0, on the fixed plane of a reversor, and so returns to it: a symmetric
-homoclinic orbit (:func:`homoclinic_spin`).
+homoclinic orbit (:func:`homoclinic_spin`). With friction the lower spin's precession grows, so its unstable
+manifold is three-dimensional and its stable manifold one-dimensional; a homoclinic orbit needs that stable
+manifold, followed backwards, to come back to the spin (:func:`lower_spin_scan`).
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq, minimize_scalar
 
 from ..dynamics import Event, Options
+from ..dynamics.homoclinic import homoclinic_scan
 from ..dynamics.melnikov import drift_at, family_drift
 from ..dynamics.orbit_branches import continue_orbits
 from ..dynamics.orbits import find_orbit
@@ -45,7 +48,7 @@ from . import critical_spin, inversion
 
 __all__ = ["SHOOTING", "EPS_PROBES", "family", "drift", "cycles", "repelling_cycle", "fold_of_cycles",
            "repelling_cycle_end", "held_fold_of_cycles", "amplitude_of", "orbit_amplitude", "averaged_amplitude",
-           "homoclinic_spin"]
+           "homoclinic_spin", "lower_spin_scan"]
 
 _gamma = held_spin.rolling_system().variables[1]
 SHOOTING = Shooting(fixed={"beta": 0.5 * math.pi, "gamma_dot": 0.0}, vary="gamma", free="beta_dot",
@@ -426,3 +429,26 @@ def homoclinic_spin(setup: Setup | None = None, bracket: tuple = (30.0, 36.0)) -
     distance = float(np.min(np.abs((states - lower) / np.array(system.state_scale)).max(axis=1)))
     return {"spin": float(spin), "tilt_at_top": float(top[0] - 0.5 * math.pi), "return_distance": distance,
             "status": "completed" if distance < RETURN_TOL else "not_verified"}
+
+
+LOWER_SPINS = tuple(np.round(np.arange(30.0, 36.01, 0.25), 2))  # rad/s: the default scan of lower_spin_scan
+LOWER_RADIUS = 0.1  # scaled: the backward branch comes back to the lower spin with up to 0.085 of precession left
+
+
+def lower_spin_scan(eps: float, setup: Setup | None = None, spins=LOWER_SPINS, **options) -> xr.Dataset:
+    """The lower spin's one-dimensional stable manifold in the held model with friction (eps > 0 [m/s]), followed
+    backwards from the side S arrives on (gamma increasing) over the top and back to the lower spin, at each held
+    spin [rad/s] in ``spins`` (:func:`tippedisk_analysis.dynamics.homoclinic.homoclinic_scan`). side +1: it
+    leaves the lower spin again rolling on over the top (gamma still falling, backwards in time); -1: it turns
+    back. Every change of side is bisected and checked; only a ``completed`` crossing is a homoclinic orbit of
+    the lower spin. ``options``: ``radius`` (default LOWER_RADIUS), ``offset``, ``t_max``, ``xtol`` of the generic
+    functions. For eps = 0 see :func:`homoclinic_spin`."""
+    if isinstance(eps, bool) or not (isinstance(eps, numbers.Real) and math.isfinite(eps) and eps > 0):
+        raise ParameterError(f"eps = {eps!r}: give the friction parameter in m/s, e.g. 0.005 (for eps = 0 use "
+                             "nutation_cycles.homoclinic_spin)")
+    pars = _pars(held_spin.DEFAULT_SPIN, setup, float(eps))  # the lower spin is an equilibrium at every spin
+    ds = homoclinic_scan(held_spin.system(), held_spin.spin_state("lower"), "spin", spins, pars,
+                         manifold="stable", branch="-gamma", shift=(0.0, -2.0 * math.pi, 0.0, 0.0),
+                         **{"radius": LOWER_RADIUS, **options})
+    ds.attrs.update(eps=float(eps), homoclinic_orbits=int(np.sum(ds.crossing_status.values == "completed")))
+    return ds

@@ -26,6 +26,7 @@ import numpy as np
 import xarray as xr
 
 from ..errors import ParameterError
+from .branches import bounds_pair
 from .system import System
 
 MANIFOLDS = {"unstable": 1.0, "stable": -1.0}  # the time direction in which the branch is followed
@@ -47,8 +48,9 @@ class Return:
     side, 0 if it did not (for ``no_return`` and ``escaped`` the side of its closest approach, a guess that guides
     the bisection); status: ``returned``, ``no_return`` (not back within radius by t_max), ``stayed`` (back, but
     not gone again by t_max), ``escaped`` (to infinity, or a non-finite state, before coming back) or ``failed``
-    (the step budget ran out); time: of the return [system time]; stay: time spent within 2 radius of the saddle
-    after it; closest: the least scaled distance to the saddle on the way back."""
+    (the step budget ran out); time: of the return [system time]; stay: the time from it until the branch is
+    2 radius away along the one-dimensional direction; closest: the least scaled distance to the saddle on the
+    way back."""
 
     side: int
     status: str
@@ -117,23 +119,16 @@ class _SaddleTrack:
 
 
 def manifold_return(system: System, state, pars=None, *, manifold: str = "unstable", branch: float | str = 1.0,
-                    shift=None, radius: float = 0.02, offset: float = 1e-7, t_max: float = 200.0) -> Return:
+                    shift=None, radius: float = 0.05, offset: float = 1e-7, t_max: float = 200.0) -> Return:
     """Follow one branch of the one-dimensional ``manifold`` of the saddle near ``state`` and report how it comes
     back within ``radius`` (scaled distance) of the saddle (+ ``shift``). ``branch``: +1 or -1, the side of the
     eigenvector v of :func:`saddle`, or "+name" / "-name", the side on which state ``name`` grows or falls;
-    ``offset``: the start's scaled distance from the saddle; ``t_max``: in the system's time."""
+    ``offset``: the start's scaled distance from the saddle; ``t_max``: in the system's time. The other
+    directions only contract near the saddle, so the branch leaves it along the one-dimensional one; ``radius``
+    must exceed what is left of them when the branch comes back (the side itself does not depend on it)."""
     pars = system.with_pars(pars)
     xs, _w, v, l_, lam, _centre = saddle(system, state, pars, manifold)
-    if isinstance(branch, str):
-        if branch[:1] not in "+-" or branch[1:] not in system.state_names:
-            raise ParameterError(f"branch = {branch!r}: give +1, -1 or '+name' / '-name' with a state name of "
-                                 f"{system.name} ({', '.join(system.state_names)})")
-        component = v[system.state_index(branch[1:])]
-        if component == 0.0:
-            raise ParameterError(f"branch = {branch!r}: {branch[1:]} does not move along the manifold; use +1 or -1")
-        branch = math.copysign(1.0, component) * (1.0 if branch[0] == "+" else -1.0)
-    elif branch not in (1, -1):
-        raise ParameterError(f"branch = {branch!r}: give +1, -1 or '+name' / '-name'")
+    branch = _branch_sign(system, branch, v)
     target = xs + (np.zeros(system.n) if shift is None else np.asarray(shift, dtype=float))
     scale = system.state_scale
     ta = copy.deepcopy(system.taylor(TOL))
@@ -165,16 +160,30 @@ def manifold_return(system: System, state, pars=None, *, manifold: str = "unstab
             closest, side_closest = d, int(math.copysign(1.0, branch * (l_ @ (x - target))))
         if entered_at is None and d < radius:
             entered_at = abs(ta.time)
-        elif entered_at is not None and d > 2 * radius:
-            u = branch * float(l_ @ (x - target))
+        elif entered_at is not None and (abs(u := branch * float(l_ @ (x - target))) > 2 * radius
+                                         or d > LEAVE * radius):
             return Return(int(math.copysign(1.0, u)), "returned", entered_at, abs(ta.time) - entered_at, closest)
     if entered_at is None:
         return Return(side_closest, "no_return", math.nan, 0.0, closest)
     return Return(0, "stayed", entered_at, abs(ta.time) - entered_at, closest)
 
 
+def manifold_branch(system: System, state, pars=None, *, manifold: str = "unstable", branch: float | str = 1.0,
+                    duration: float = 1.0, samples: int = 400, offset: float = 1e-7) -> tuple[np.ndarray, np.ndarray]:
+    """(times, states (samples, n)) along the branch of :func:`manifold_return` for ``duration`` (backward in
+    time for the stable manifold: times fall from 0), e.g. to draw a located homoclinic orbit."""
+    pars = system.with_pars(pars)
+    xs, _w, v, _l, _lam, _centre = saddle(system, state, pars, manifold)
+    ta = copy.deepcopy(system.taylor(TOL))
+    ta.time = 0.0
+    ta.pars[:] = np.asarray(pars, dtype=float)[: len(ta.pars)]
+    ta.state[:] = xs + offset * _branch_sign(system, branch, v) * v
+    times = MANIFOLDS[manifold] * np.linspace(0.0, float(duration), int(samples))
+    return times, np.asarray(ta.propagate_grid(times, max_steps=MAX_STEPS)[-1])
+
+
 def homoclinic_point(system: System, state, parameter: str, bracket, pars=None, *, manifold: str = "unstable",
-                     branch: float | str = 1.0, shift=None, radius: float = 0.02, offset: float = 1e-7,
+                     branch: float | str = 1.0, shift=None, radius: float = 0.05, offset: float = 1e-7,
                      t_max: float = 200.0, xtol: float = 1e-10) -> dict:
     """The value of ``parameter`` in ``bracket`` at which the branch of :func:`manifold_return` is a homoclinic
     orbit, by bisection on the side it leaves on. ``state``: the saddle (roughly) at ``pars``; it is followed to each
@@ -187,7 +196,7 @@ def homoclinic_point(system: System, state, parameter: str, bracket, pars=None, 
     "evaluations"}; status ``completed``, ``no_crossing`` (the same side, or no return, at an end of the
     bracket), ``not_verified`` (a check failed) or ``not_hyperbolic`` (the saddle has centre eigenvalues: a
     connection to its centre-stable manifold)."""
-    low, high = _bracket(bracket, parameter)
+    low, high = bounds_pair(bracket, parameter)
     track = _SaddleTrack(system, state, parameter, pars, manifold)
     count = 0
 
@@ -221,8 +230,8 @@ def homoclinic_point(system: System, state, parameter: str, bracket, pars=None, 
     result.update(value=value, saddle=xs, eigenvalues=w, lambda_1=lam, return_time=0.5 * (ends[0].time + ends[1].time),
                   stay=min(r.stay for r in ends), evaluations=count)
     small = run(low, offset / 10), run(high, offset / 10)
-    problems = [f"at {parameter} = {v:.12g} the branch {r.status}" for v, r in zip((low, high), ends)
-                if r.status != "returned"]
+    problems = [f"at {parameter} = {v:.12g} the branch {r.status} (closest {r.closest:.3g}: a larger radius may "
+                "see it return)" for v, r in zip((low, high), ends) if r.status != "returned"]
     if result["stay"] * abs(lam) < STAY_FACTOR:
         problems.append(f"the branch stays near the saddle only {result['stay']:.3g} (lambda_1 {lam:.4g}): a jump "
                         "between two returns, not a homoclinic orbit")
@@ -242,7 +251,8 @@ def homoclinic_point(system: System, state, parameter: str, bracket, pars=None, 
 def homoclinic_scan(system: System, state, parameter: str, values, pars=None, **keywords) -> xr.Dataset:
     """:func:`manifold_return` at each of ``values`` of ``parameter`` (the saddle followed along them), and every
     change of side between neighbours located by :func:`homoclinic_point` (keywords: both functions'). Variables
-    over ``value``: side, return_status, closest; over ``crossing``: the located value, its status and stay.
+    over ``value``: side, return_status, closest; over ``crossing``: the located value, its status, stay and
+    return time.
     A homoclinic orbit between two values with the same side (an even number of crossings) is not seen."""
     values = _values(values, parameter)
     point_keywords = {k: keywords.pop(k) for k in ("xtol",) if k in keywords}
@@ -262,12 +272,14 @@ def homoclinic_scan(system: System, state, parameter: str, values, pars=None, **
                      "closest": ("value", [r.closest for r in returns]),
                      "crossing_value": ("crossing", [c["value"] for c in crossings]),
                      "crossing_status": ("crossing", np.array([c["status"] for c in crossings], dtype=str)),
-                     "crossing_stay": ("crossing", [c["stay"] for c in crossings])},
+                     "crossing_stay": ("crossing", [c["stay"] for c in crossings]),
+                     "crossing_return_time": ("crossing", [c["return_time"] for c in crossings])},
                     coords={"value": values})
     ds["value"].attrs = {"long_name": parameter, "units": system.units_of(parameter)}
     ds["side"].attrs = {"long_name": "+1: the branch left the saddle again on its own side; -1: on the other"}
     ds["closest"].attrs = {"long_name": "least scaled distance to the saddle on the way back", "units": "1"}
     ds["crossing_stay"].attrs = {"units": system.time_units}
+    ds["crossing_return_time"].attrs = {"units": system.time_units}
     ds.attrs = {"title": f"homoclinic scan of {system.name} in {parameter}", "system": system.name,
                 "manifold": keywords.get("manifold", "unstable")}
     return ds
@@ -281,7 +293,7 @@ def homoclinic_curve(system: System, state, parameter: str, second: str, values,
     ``point``: ``parameter``, ``second``, status, return_time, stay, lambda_1 and the saddle's eigenvalues."""
     values = _values(values, second)
     index, second_index = system.parameter_index(parameter), system.parameter_index(second)
-    low, high = _bracket(bracket, parameter)
+    low, high = bounds_pair(bracket, parameter)
     width, found, points = high - low, [], []
     p = system.with_pars(pars)
     for value in values:
@@ -314,6 +326,22 @@ def homoclinic_curve(system: System, state, parameter: str, second: str, values,
     return ds
 
 
+def _branch_sign(system: System, branch, v: np.ndarray) -> float:
+    """+1 or -1: the multiple of v that starts ``branch`` (+1, -1, or "+name" / "-name": state ``name`` grows
+    or falls)."""
+    if isinstance(branch, str):
+        if branch[:1] not in ("+", "-") or branch[1:] not in system.state_names:
+            raise ParameterError(f"branch = {branch!r}: give +1, -1 or '+name' / '-name' with a state name of "
+                                 f"{system.name} ({', '.join(system.state_names)})")
+        component = v[system.state_index(branch[1:])]
+        if component == 0.0:
+            raise ParameterError(f"branch = {branch!r}: {branch[1:]} does not move along the manifold; use +1 or -1")
+        return math.copysign(1.0, component) * (1.0 if branch[0] == "+" else -1.0)
+    if branch not in (1, -1):
+        raise ParameterError(f"branch = {branch!r}: give +1, -1 or '+name' / '-name'")
+    return float(branch)
+
+
 def _values(values, name: str) -> np.ndarray:
     try:
         values = np.asarray(values, dtype=float)
@@ -322,13 +350,3 @@ def _values(values, name: str) -> np.ndarray:
     if values.ndim != 1 or len(values) == 0 or not np.all(np.isfinite(values)):
         raise ParameterError(f"values of {name}: give a one-dimensional sequence of finite numbers")
     return values
-
-
-def _bracket(bracket, parameter: str) -> tuple[float, float]:
-    try:
-        low, high = (float(b) for b in bracket)
-    except (TypeError, ValueError):
-        raise ParameterError(f"bracket = {bracket!r}: give two numbers (low, high) of {parameter}") from None
-    if not (math.isfinite(low) and math.isfinite(high) and low < high):
-        raise ParameterError(f"bracket = {bracket!r}: give finite low < high values of {parameter}")
-    return low, high
