@@ -36,6 +36,10 @@ def test_the_homoclinic_curve_of_a_two_parameter_loop_is_the_line_c_minus_d():
     ds = hc.homoclinic_curve(_loop(), (0.0, 0.0), "c", "d", np.linspace(0.0, 0.05, 4), (-0.02, 0.03))
     assert list(ds.status.values) == ["completed"] * 4
     np.testing.assert_allclose(ds.c.values, -ds.d.values, atol=1e-9)
+    # steps in d far wider than the bracket: the bracket is widened until the side changes
+    wide = hc.homoclinic_curve(_loop(), (0.0, 0.0), "c", "d", [0.0, 0.05, 0.1], (-0.01, 0.01))
+    assert list(wide.status.values) == ["completed"] * 3
+    np.testing.assert_allclose(wide.c.values, [0.0, -0.05, -0.1], atol=1e-9)
 
 
 def _ab_saddle(D: float) -> tuple[float, float]:

@@ -36,6 +36,7 @@ NEWTON_TOL = 1e-12  # the saddle is refined by Newton's method to this scaled re
 TOL = 1e-13  # Taylor tolerance
 ESCAPE = 1e3  # scaled distance from the saddle at which a branch counts as gone for good
 MAX_STEPS = 200_000  # Taylor steps per branch
+CURVE_WIDENINGS = 4  # homoclinic_curve widens a bracket without a change of side up to 2**4 times
 FOLLOW_STEPS = 8  # Newton steps in which the saddle is followed from one parameter value to the next
 LEAVE = 10.0  # the branch has left the saddle once it is this many radii from it; then its return counts
 
@@ -287,10 +288,12 @@ def homoclinic_scan(system: System, state, parameter: str, values, pars=None, **
 
 def homoclinic_curve(system: System, state, parameter: str, second: str, values, bracket, pars=None,
                      **keywords) -> xr.Dataset:
-    """The homoclinic orbit of :func:`homoclinic_point` continued in a ``second`` parameter over ``values``
-    (``pars`` holds the first one): at each value it is located in a bracket as wide as ``bracket``, centred on
-    the value extrapolated from the previous points, from the previous point's saddle. Variables over
-    ``point``: ``parameter``, ``second``, status, return_time, stay, lambda_1 and the saddle's eigenvalues."""
+    """The homoclinic orbit of :func:`homoclinic_point` continued in a ``second`` parameter over ``values`` (in
+    order; ``pars`` holds the first one): at each value it is located in a bracket as wide as ``bracket``, centred
+    on the value extrapolated from the previous points, from the previous point's saddle; if the side does not
+    change there, in one 2, 4, ... 2**CURVE_WIDENINGS times as wide (which may find another homoclinic orbit).
+    Variables over ``point``: ``parameter``, ``second``, status, return_time, stay, lambda_1 and the saddle's
+    eigenvalues."""
     values = _values(values, second)
     index, second_index = system.parameter_index(parameter), system.parameter_index(second)
     low, high = bounds_pair(bracket, parameter)
@@ -303,7 +306,12 @@ def homoclinic_curve(system: System, state, parameter: str, second: str, values,
             centre = h1 + ((h1 - h0) * (value - s1) / (s1 - s0) if s1 != s0 else 0.0)
             low, high = centre - 0.5 * width, centre + 0.5 * width
             p[index] = h1
-        point = homoclinic_point(system, state, parameter, (low, high), p, **keywords)
+        for widening in range(CURVE_WIDENINGS + 1):  # no change of side: the bracket, 2, 4, ... times as wide
+            half = 0.5 * (high - low) * 2 ** widening
+            point = homoclinic_point(system, state, parameter, (0.5 * (low + high) - half, 0.5 * (low + high) + half),
+                                     p, **keywords)
+            if point["status"] != "no_crossing":
+                break
         points.append(point)
         if point["status"] in ("completed", "not_hyperbolic"):
             found.append((value, point["value"]))
