@@ -98,3 +98,61 @@ def test_bad_input_is_refused_in_one_line():
     for words, call in calls.items():
         with pytest.raises(ParameterError, match=words):
             call()
+
+
+def _pendulum() -> dy.System:
+    """The damped pendulum with a constant torque, x'' + delta x' + sin x = tau: its saddle (pi - asin tau, 0)
+    has a loop once round (x -> x + 2 pi) where tau / delta -> 4 / pi as delta -> 0 (Melnikov)."""
+    x, y = hy.make_vars("x", "y")
+    return dy.System("torque_pendulum", (x, y), (y, hy.par[0] - hy.sin(x) - hy.par[1] * y),
+                     {"tau": 0.0, "delta": 0.1})
+
+
+def test_the_torque_pendulums_loop_tends_to_melnikovs_ratio():
+    """A system none of the code was tuned on: tau / delta at the loop approaches 4 / pi like delta^2."""
+    pendulum = _pendulum()
+    gaps = []
+    for delta in (0.05, 0.025):
+        found = hc.homoclinic_point(pendulum, (math.pi, 0.0), "tau", (0.5 * delta, 2.0 * delta),
+                                    {"delta": delta, "tau": 0.5 * delta}, shift=(2 * math.pi, 0.0))
+        assert found["status"] == "completed", found["message"]
+        gaps.append(4 / math.pi - found["value"] / delta)
+    assert 0 < gaps[1] < gaps[0] / 3.5  # O(delta^2)
+
+
+def test_inputs_that_would_hang_or_be_misread_are_refused():
+    pendulum = _pendulum()
+    pars = {"tau": 0.1, "delta": 0.1}
+    saddle = (math.pi, 0.0)
+    calls = {"xtol": lambda: hc.homoclinic_point(pendulum, saddle, "tau", (0.1, 0.15), pars, xtol=0.0),
+             "shift": lambda: hc.manifold_return(pendulum, saddle, pars, shift=2 * math.pi),
+             "radius": lambda: hc.manifold_return(pendulum, saddle, pars, radius=0.0),
+             "offset": lambda: hc.manifold_return(pendulum, saddle, pars, offset=-1e-7),
+             "t_max": lambda: hc.manifold_return(pendulum, saddle, pars, t_max=math.inf),
+             "branch": lambda: hc.manifold_return(pendulum, saddle, pars, branch=True),
+             "state": lambda: hc.manifold_return(pendulum, ("pi", 0.0), pars),
+             "another one": lambda: hc.homoclinic_curve(pendulum, saddle, "tau", "tau", [0.1], (0.1, 0.15), pars),
+             "duration": lambda: hc.manifold_branch(pendulum, saddle, pars, duration=-5.0),
+             "samples": lambda: hc.manifold_branch(pendulum, saddle, pars, samples=0),
+             "lost at tau": lambda: hc.homoclinic_point(pendulum, saddle, "tau", (0.1, 1.5), pars)}
+    for words, call in calls.items():
+        with pytest.raises(ParameterError, match=words):
+            call()
+
+
+def test_an_end_where_the_side_is_undefined_is_looked_inside():
+    """Sandstede's three-dimensional system (AUTO-07p demo 'san'), with a = 0, b = 1, c = -2, beta = 1,
+    gamma = mu = 0: x' = y + m x (2 - 3x), y' = x - 3/2 x^2 - 2 m y, z' = -2z + alpha (x^2 (1 - x) - y^2),
+    m = mutilde - alpha z. At mutilde = 0, z = 0 and the loop y^2 = x^2 (1 - x) are invariant: a homoclinic orbit
+    for every alpha. At alpha = 0 and mutilde = -0.1 the branch escapes without coming near the saddle, so that
+    end of the bracket says nothing, and points inside it decide."""
+    x, y, z = hy.make_vars("x", "y", "z")
+    mutilde, alpha = hy.par[0], hy.par[1]
+    m = mutilde - alpha * z
+    san = dy.System("sandstede", (x, y, z), (y + m * x * (2 - 3 * x), x - 1.5 * x * x - 2 * m * y,
+                                              -2 * z + alpha * (x * x * (1 - x) - y * y)),
+                    {"mutilde": 0.0, "alpha": 0.0})
+    for a in (0.0, 0.5, 1.0):
+        found = hc.homoclinic_point(san, (0.0, 0.0, 0.0), "mutilde", (-0.1, 0.05), {"alpha": a})
+        assert found["status"] == "completed", found["message"]
+        assert abs(found["value"]) < 1e-9

@@ -234,8 +234,15 @@ class System:
         return self.state_names.index(name)
 
     def with_pars(self, pars=None, **values) -> np.ndarray:
-        """The runtime parameter vector (default values, or ``pars``) with some values replaced by name."""
-        out = self.pars.copy() if pars is None else np.array(pars, dtype=float).copy()
+        """The runtime parameter vector (default values, or ``pars``: a vector, or {name: value} over the defaults)
+        with some values replaced by name."""
+        if isinstance(pars, dict):
+            return self.with_pars(None, **{**pars, **values})
+        try:
+            out = self.pars.copy() if pars is None else np.array(pars, dtype=float).copy()
+        except (TypeError, ValueError):
+            raise ParameterError(f"pars = {pars!r}: give {len(self.pars)} numbers ({', '.join(self.parameter_names)})"
+                                 " or a dict of them by name") from None
         if out.shape != self.pars.shape:
             raise ParameterError(f"{self.name} has {len(self.pars)} parameters ({', '.join(self.parameter_names)}), "
                                  f"not {out.size}")
