@@ -134,6 +134,7 @@ def test_inputs_that_would_hang_or_be_misread_are_refused():
              "another one": lambda: hc.homoclinic_curve(pendulum, saddle, "tau", "tau", [0.1], (0.1, 0.15), pars),
              "duration": lambda: hc.manifold_branch(pendulum, saddle, pars, duration=-5.0),
              "samples": lambda: hc.manifold_branch(pendulum, saddle, pars, samples=0),
+             "pair": lambda: hc.homoclinic_point(pendulum, saddle, "tau", "12", pars),
              "lost at tau": lambda: hc.homoclinic_point(pendulum, saddle, "tau", (0.1, 1.5), pars)}
     for words, call in calls.items():
         with pytest.raises(ParameterError, match=words):

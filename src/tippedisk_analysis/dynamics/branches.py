@@ -35,6 +35,8 @@ def _options(options: Options | None, overrides: dict) -> Options:
 
 def bounds_pair(bounds, name: str) -> tuple[float, float]:
     try:
+        if isinstance(bounds, str | bytes):
+            raise TypeError
         low, high = (float(b) for b in bounds)
     except (TypeError, ValueError):
         raise ParameterError(f"bounds of {name} = {bounds!r}: give a pair (low, high), e.g. (0.0, 0.2)") from None
