@@ -431,8 +431,8 @@ def homoclinic_spin(setup: Setup | None = None, bracket: tuple = (30.0, 36.0)) -
             "status": "completed" if distance < RETURN_TOL else "not_verified"}
 
 
-LOWER_SPINS = tuple(np.round(np.arange(30.0, 36.01, 0.25), 2))  # rad/s: the default scan of lower_spin_scan
-LOWER_RADIUS = 0.1  # scaled: the backward branch comes back to the lower spin with up to 0.085 of precession left
+LOWER_SPINS = tuple(np.round(np.arange(26.0, 36.01, 0.25), 2))  # rad/s: the default scan of lower_spin_scan
+LOWER_RADIUS = 0.1  # scaled: on the e = 3.5 mm disk the branch comes back no closer than 0.051 (precession left)
 
 
 def lower_spin_scan(eps: float, setup: Setup | None = None, spins=LOWER_SPINS, **options) -> xr.Dataset:
