@@ -134,6 +134,8 @@ def test_inputs_that_would_hang_or_be_misread_are_refused():
              "another one": lambda: hc.homoclinic_curve(pendulum, saddle, "tau", "tau", [0.1], (0.1, 0.15), pars),
              "duration": lambda: hc.manifold_branch(pendulum, saddle, pars, duration=-5.0),
              "samples": lambda: hc.manifold_branch(pendulum, saddle, pars, samples=0),
+             "shorter duration": lambda: hc.manifold_branch(dy.textbook_system("homoclinic"), (0.0, 0.0),
+                                                            {"c": 0.05}, duration=60.0),
              "pair": lambda: hc.homoclinic_point(pendulum, saddle, "tau", "12", pars),
              "lost at tau": lambda: hc.homoclinic_point(pendulum, saddle, "tau", (0.1, 1.5), pars)}
     for words, call in calls.items():

@@ -225,7 +225,12 @@ def manifold_branch(system: System, state, pars=None, *, manifold: str = "unstab
     ta.pars[:] = np.asarray(pars, dtype=float)[: len(ta.pars)]
     ta.state[:] = xs + offset * _branch_sign(system, branch, v) * v
     times = MANIFOLDS[manifold] * np.linspace(0.0, float(duration), int(samples))
-    return times, np.asarray(ta.propagate_grid(times, max_steps=MAX_STEPS)[-1])
+    result = ta.propagate_grid(times, max_steps=MAX_STEPS)
+    states = np.asarray(result[-1])
+    if result[0] != hy.taylor_outcome.time_limit or len(states) != len(times) or not np.all(np.isfinite(states)):
+        raise ParameterError(f"the branch stopped ({result[0]!r}) at t = {ta.time:.6g} of {times[-1]:.6g}; give a "
+                             "shorter duration")
+    return times, states
 
 
 def homoclinic_point(system: System, state, parameter: str, bracket, pars=None, *, manifold: str = "unstable",
