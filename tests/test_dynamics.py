@@ -252,3 +252,23 @@ def test_roessler_lyapunov_spectrum_against_the_published_values():
     ds = dy.lyapunov_spectrum(roessler, [1.0, 1.0, 1.0], t_end=10000.0, dt=1.0, transient=100.0)
     np.testing.assert_allclose(ds.exponents.values, [0.0714, 0.0, -5.3943], atol=2e-3)
     assert float(ds.exponents.sum()) == pytest.approx(float(ds.divergence_mean), rel=1e-3)  # Liouville
+
+
+def test_a_start_inside_the_bounds_is_continued_both_ways_or_says_it_covered_one_side():
+    """x' = p + x - x^3: the S-curve p = x^3 - x has folds at p = +-2/(3 sqrt 3). From its middle (0, 0) one way
+    finds one fold and says it covered one side; both ways (direction=0) finds both and reaches both bounds."""
+    x = hy.make_vars("x")
+    s = dy.System("s_curve", [x], [hy.par[0] + x - x**3], parameters={"p": 0.0})
+    fold = 2 / (3 * math.sqrt(3))
+    one = dy.equilibrium_branch(s, [0.0], "p", bounds=(-1.0, 1.0))
+    assert "one side of the start p = 0 only" in one.attrs["message"]
+    both = dy.equilibrium_branch(s, [0.0], "p", bounds=(-1.0, 1.0), direction=0)
+    assert "one side" not in both.attrs["message"] and both.attrs["status"] == "completed"
+    p = both["p"].values
+    assert p.min() == pytest.approx(-1.0, abs=1e-9) and p.max() == pytest.approx(1.0, abs=1e-9)
+    folds = sorted(float(p[i]) for i, label in zip(both["special_index"].values, both["special_label"].values)
+                   if str(label).startswith("LP"))
+    assert folds == pytest.approx([-fold, fold], abs=1e-7)
+    assert [str(label) for label in one["special_label"].values] == ["LP1"]
+    with pytest.raises(td.TippediskError, match="direction"):
+        dy.equilibrium_branch(s, [0.0], "p", bounds=(-1.0, 1.0), direction=2)

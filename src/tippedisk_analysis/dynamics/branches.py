@@ -50,7 +50,9 @@ def equilibrium_branch(system: System, state, parameter: str, *, bounds, pars=No
                        **option_keywords) -> xr.Dataset:
     """The branch of equilibria through ``state`` (corrected first) at ``pars`` (default: the system's
     values), continued in ``parameter`` within ``bounds`` = (low, high), starting towards increasing
-    (``direction`` = 1) or decreasing values; ``scale``: the parameter's typical size (arclength metric);
+    (``direction`` = 1) or decreasing (-1) values, or both ways (0: one branch ordered from one end to the
+    other). A start strictly inside ``bounds`` continued one way covers one side only: the dataset's message
+    says so and names ``direction=0``. ``scale``: the parameter's typical size (arclength metric);
     ``marks``: parameter values where the branch's points are computed exactly (user points UZ1, ...).
     Options: :class:`.continuation.Options` or its fields as keywords (ds, ds_max, max_points, ...)."""
     pars = system.with_pars(pars)
@@ -61,9 +63,17 @@ def equilibrium_branch(system: System, state, parameter: str, *, bounds, pars=No
     state = np.asarray(state, dtype=float)
     if state.shape != (system.n,):
         raise ParameterError(f"the state needs {system.n} values ({', '.join(system.state_names)})")
+    if direction not in (-1, 0, 1):
+        raise ParameterError(f"direction = {direction!r}: give 1 (increasing {parameter}), -1 (decreasing) or 0 (both)")
     prob = EquilibriumProblem(system, [Parameter.of(system, parameter, scale)], pars=pars, bounds={0: (low, high)})
-    br = continue_branch(prob, np.append(state, pars[index]), _options(options, option_keywords), direction=direction,
-                         marks=marks)
+    u0, opts = np.append(state, pars[index]), _options(options, option_keywords)
+    if direction == 0:
+        br = continue_both_ways(prob, u0, opts, marks=marks)
+    else:
+        br = continue_branch(prob, u0, opts, direction=direction, marks=marks)
+        if low < pars[index] < high:
+            br.message += (f"; one side of the start {parameter} = {pars[index]:g} only (direction=0 continues both "
+                           "ways)")
     return continuation_dataset(br, prob, {"start": list(map(float, state)), "parameter": parameter})
 
 
