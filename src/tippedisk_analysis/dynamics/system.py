@@ -407,10 +407,10 @@ class System:
         def build():
             sys = list(zip(self.variables, self.rhs))
             if tangents or indices:
-                if extra:
-                    raise ParameterError("variational integrators take no extra equations")
                 sys = hy.var_ode_sys(sys, [*self.variables[:tangents], *(hy.par[i] for i in indices)], order=1)
                 equations = list(sys.sys)
+                if extra:  # a plain integrator of the variational equations and the quadratures
+                    sys = equations = equations + list(extra)
             else:
                 sys = equations = sys + list(extra)
             size = len(equations)
