@@ -19,7 +19,8 @@ import numpy as np
 import xarray as xr
 
 from ..defaults import BATCH_SIZE, FALL_ANGLE, MAP_TOL, SLIP_SMOOTHING
-from ..dynamics.lyapunov import DT, TOL, LyapunovResult, initial_frame, spectrum, spectrum_dataset  # noqa: F401
+from ..dynamics.lyapunov import DT, N_BLOCKS, RTOL, TOL, LyapunovResult, initial_frame, spectrum, \
+    spectrum_dataset  # noqa: F401
 from ..dynamics.systems import textbook_system
 from ..errors import ParameterError
 from ..results import make_attrs
@@ -45,9 +46,11 @@ def tippedisk_start(setup, initial) -> np.ndarray:
 
 def tippedisk_spectrum(setup=None, initial=None, *, state=None, t_end: float = 20.0, dt: float = DT,
                        transient: float = 0.0, n_exponents: int | None = None, tol: float = TOL,
-                       fall_angle: float = FALL_ANGLE, slip_smoothing: float = SLIP_SMOOTHING) -> xr.Dataset:
-    """The Lyapunov spectrum of the reduced tippedisk along the run from ``initial`` (Table 3 by default) or
-    from a reduced ``state`` (e.g. a stationary solution), as a dataset of kind ``lyapunov``."""
+                       fall_angle: float = FALL_ANGLE, slip_smoothing: float = SLIP_SMOOTHING,
+                       n_blocks: int = N_BLOCKS, rtol: float = RTOL) -> xr.Dataset:
+    """The Lyapunov spectrum of the reduced tippedisk over [transient, t_end] s of the run from ``initial``
+    (Table 3 by default) or from a reduced ``state`` (e.g. a stationary solution), with standard errors from
+    ``n_blocks`` blocks, as a dataset of kind ``lyapunov`` (status ``not_converged`` until they are small)."""
     from ..models import ode
     from ..parameters import InitialState, Setup, to_dict
 
@@ -55,21 +58,24 @@ def tippedisk_spectrum(setup=None, initial=None, *, state=None, t_end: float = 2
     system = tippedisk_system(setup)
     pars = ode.parameter_vector(setup, fall_angle, slip_smoothing)
     x0 = tippedisk_start(setup, initial) if state is None else np.asarray(state, dtype=float)
-    result = spectrum(system, x0, pars, n_exponents=n_exponents, t_end=t_end, dt=dt, transient=transient, tol=tol)
+    result = spectrum(system, x0, pars, n_exponents=n_exponents, t_end=t_end, dt=dt, transient=transient, tol=tol,
+                      n_blocks=n_blocks, rtol=rtol)
     config = {"setup": to_dict(setup), "initial": to_dict(initial) if state is None else None,
               "state": None if state is None else list(map(float, x0)), "t_end": t_end, "dt": dt,
               "transient": transient, "tol": tol, "fall_angle": fall_angle, "slip_smoothing": slip_smoothing,
-              "model": "ode-euler (reduced)"}
+              "n_blocks": n_blocks, "rtol": rtol, "model": "ode-euler (reduced)"}
     return spectrum_dataset(result, system, config)
 
 
 def textbook_spectrum(name: str, state, *, t_end: float = 1000.0, dt: float = 1.0, transient: float = 10.0,
-                      tol: float = TOL, **pars) -> xr.Dataset:
-    """The spectrum of a textbook system (e.g. ``lorenz``) as a dataset."""
+                      tol: float = TOL, n_blocks: int = N_BLOCKS, rtol: float = RTOL, **pars) -> xr.Dataset:
+    """The spectrum of a textbook system (e.g. ``lorenz``) over [transient, t_end] as a dataset."""
     system = textbook_system(name)
-    result = spectrum(system, state, system.with_pars(**pars), t_end=t_end, dt=dt, transient=transient, tol=tol)
+    result = spectrum(system, state, system.with_pars(**pars), t_end=t_end, dt=dt, transient=transient, tol=tol,
+                      n_blocks=n_blocks, rtol=rtol)
     return spectrum_dataset(result, system, {"state0": list(map(float, state)), "t_end": t_end, "dt": dt,
-                                             "transient": transient, "tol": tol, "pars": pars})
+                                             "transient": transient, "tol": tol, "n_blocks": n_blocks, "rtol": rtol,
+                                             "pars": pars})
 
 
 # ============================================================================ maps over (Omega, eps)

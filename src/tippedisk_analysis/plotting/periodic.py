@@ -136,7 +136,9 @@ def lyapunov_figure(ds: xr.Dataset):
     fig, ax = plt.subplots(figsize=(8, 5), constrained_layout=True)
     t = ds.history_time.values
     for k in range(ds.sizes["exponent"]):
-        ax.plot(t, ds.running_exponents.values[:, k], lw=1.0, label=rf"$\lambda_{k + 1}$ = {float(ds.exponents[k]):.4g}")
+        error = rf" $\pm$ {float(ds.exponent_error[k]):.2g}" if "exponent_error" in ds else ""
+        ax.plot(t, ds.running_exponents.values[:, k], lw=1.0,
+                label=rf"$\lambda_{k + 1}$ = {float(ds.exponents[k]):.4g}{error}")
     ax.axhline(0, color="0.6", lw=0.8)
     ax.set_yscale("symlog", linthresh=0.1)
     ax.set_xscale("log")
