@@ -10,6 +10,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from .records import BASE_KINDS, DIVERGED, SPECIAL_LABELS, Candidate, Description, FirstTime, Grid, RecurrenceSettings
+from .sets import same_set, set_distance, subsample
 
 
 # --------------------------------------------------------------------------------------- problems
@@ -27,9 +28,12 @@ class Problem:
        1 + the index of the reason in ``rejection_reasons`` where there is one); the default is the
        generic :func:`describe`, which calls ``refine_equilibrium`` and ``amplitude_index``.
     6. ``same_attractor(a, b)``: whether two descriptions of one parameter point are one attractor
-       (default: same kind, centroids within ``merge_distance`` cells);
-       ``distance(a, b)``: for matching across parameter values (default: centroid distance in cells,
-       infinite between different kinds).
+       (default: as sets, :func:`.sets.same_set`, where both carry ``points``; else same kind and centroids
+       within ``merge_distance`` cells);
+       ``distance(a, b)``: for matching across parameter values (default: :func:`.sets.set_distance` where both
+       carry points, else the centroid distance in cells; infinite between different kinds).
+    7. ``set_points``: how many points describe a periodic or irregular attractor as a set (0: none, compared
+       by centroid); the generic :func:`describe` takes them from its samples.
     """
 
     state_names: tuple[str, ...] = ()
@@ -43,6 +47,7 @@ class Problem:
     rejection_reasons: tuple[str, ...] = ()  # why ``describe`` may find a candidate no attractor
     rejection: int = 0  # set by ``describe`` when it returns None: 1 + index into rejection_reasons (0: none)
     merge_distance: float = 1.5  # cells
+    set_points: int = 0  # points of an attractor's set (:mod:`.sets`); 0: attractors compare by centroid
 
     @property
     def representative_names(self) -> tuple[str, ...]:
@@ -74,12 +79,16 @@ class Problem:
         return {"state": core.settle(state, pars)}
 
     def same_attractor(self, a: Description, b: Description) -> bool:
+        if a.points is not None and b.points is not None:
+            return same_set(self.grid, a, b, self.merge_distance)
         return a.kind == b.kind and float(np.max(np.abs(self.grid.difference(a.centroid, b.centroid)))) <= \
             self.merge_distance
 
     def distance(self, a: Description, b: Description) -> float:
         if a.kind != b.kind:
             return math.inf
+        if a.points is not None and b.points is not None:
+            return set_distance(self.grid, a, b)
         return float(np.linalg.norm(self.grid.difference(a.centroid, b.centroid)))
 
     # labels of this problem: attractor ids >= 0, then these
@@ -274,7 +283,8 @@ def periodic_description(problem: Problem, state, pars, guess: float, core: Desc
     whole = ys[:, ts <= ts[0] + period * math.floor((ts[-1] - ts[0]) / period)]  # whole periods
     centroid = circular_mean(grid, whole)
     spread = 0.5 * np.ptp(grid.unwrap(whole), axis=1) * grid.widths
-    return Description("periodic", problem.represent(state), centroid, spread, amplitude, period)
+    points = subsample(ys[:, ts < ts[0] + period], problem.set_points) if problem.set_points else None
+    return Description("periodic", problem.represent(state), centroid, spread, amplitude, period, points=points)
 
 
 def describe(problem: Problem, cand: Candidate, core: DescribeContext) -> Description | None:
@@ -297,7 +307,9 @@ def describe(problem: Problem, cand: Candidate, core: DescribeContext) -> Descri
         if desc is not None:
             return desc
     amplitude = 0.5 * float(np.ptp(yu[problem.amplitude_index, h:])) * grid.widths[problem.amplitude_index]
-    return Description("irregular", problem.represent(cand.states[:, -1]), centroid, spread, amplitude, -1.0)
+    points = subsample(cand.observed, problem.set_points) if problem.set_points else None
+    return Description("irregular", problem.represent(cand.states[:, -1]), centroid, spread, amplitude, -1.0,
+                       points=points)
 
 
 def _radius(grid: Grid, cells: set, centroid: np.ndarray) -> float:

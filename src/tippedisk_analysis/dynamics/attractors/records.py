@@ -180,6 +180,8 @@ class Description:
     transient: bool = False  # a slowly evolving state, not an attractor: runs are assigned, its cells not kept
     cells: tuple = ()  # the attractor's cell numbers where known (a closed orbit, an equilibrium's
     # neighbourhood): they replace the cells of the window that found it
+    points: np.ndarray | None = None  # (D, M) the attractor as a set in observed coordinates (:mod:`.sets`):
+    # one period at equal time steps (periodic), samples of a long run (irregular); None: compared by centroid
 
 
 @dataclasses.dataclass

@@ -32,6 +32,7 @@ from ..system import System
 from .mapping import map_points
 from .problem import Problem, circular_mean, closest_return, describe, equilibrium_description
 from .records import BASE_KINDS, Candidate, Description, Grid, RecurrenceSettings
+from .sets import points_of, set_names, subsample
 from .tables import assemble_table, chunk_result, column_names
 
 TOL = 1e-10  # Taylor tolerance of the runs: classifications, not trajectories to round-off
@@ -39,7 +40,7 @@ NEWTON_STEPS = 30  # Newton iterations towards an equilibrium
 RESIDUAL_TOL = 1e-12  # |f| / state_scale of an equilibrium, relative to the size of its terms
 PERIOD_RTOL = 1e-3  # the shooting period of a periodic attractor against the recorded return time
 NEIGHBOURHOOD = 2.0  # cells (max-norm) around an equilibrium that become its cells
-IRREGULAR_MERGE = 0.25  # two irregular attractors whose centroids differ by at most this share of their spread
+SET_POINTS = 64  # points of a periodic or irregular attractor's set (:mod:`.sets`)
 LONG_WINDOWS = 10  # an irregular candidate's run goes on this many locate windows in search of a return
 RETURN_REFERENCES = 8  # samples of the long run's second half tried as the state a return comes back to
 
@@ -49,6 +50,7 @@ class SystemProblem(Problem):
     its terminal events (their names label the runs they end), observed through ``grid``'s coordinates."""
 
     escapes = True
+    set_points = SET_POINTS
     rejection_reasons = ("not_equilibrium", "unstable_equilibrium", "orbit_not_closed", "unstable_orbit",
                          "contracting")
 
@@ -118,16 +120,8 @@ class SystemProblem(Problem):
         if not self._not_contracting(states[:, -1], candidate.pars, max(s.horizon, times[-1])):
             return None
         spread = 0.5 * np.ptp(self.grid.unwrap(observed), axis=1) * self.grid.widths  # the long run's, not the window's
-        return dataclasses.replace(desc, centroid=circular_mean(self.grid, observed), spread=spread)
-
-    def same_attractor(self, a: Description, b: Description) -> bool:
-        """As :meth:`.problem.Problem.same_attractor`; two irregular sets (chaos: a run's mean wanders by more
-        than a cell) are one when their centroids differ by at most IRREGULAR_MERGE of their spread."""
-        if a.kind == b.kind == "irregular":
-            spread = np.maximum(np.maximum(a.spread, b.spread), self.grid.widths)
-            return bool(np.all(np.abs(self.grid.difference(a.centroid, b.centroid)) * self.grid.widths
-                               <= IRREGULAR_MERGE * spread))
-        return super().same_attractor(a, b)
+        return dataclasses.replace(desc, centroid=circular_mean(self.grid, observed), spread=spread,
+                                   points=subsample(observed, self.set_points))
 
     def _with_neighbourhood(self, desc: Description, observed) -> Description:
         """An equilibrium with the cells of the samples ``observed`` (D, L) within NEIGHBOURHOOD cells of it as
@@ -218,7 +212,8 @@ class SystemProblem(Problem):
         return Description("periodic", orbit.states[0], circular_mean(self.grid, observed),
                            0.5 * np.ptp(unwrapped, axis=1) * self.grid.widths,
                            0.5 * float(np.ptp(unwrapped[k])) * self.grid.widths[k], float(orbit.period),
-                           cells=tuple(int(c) for c in np.unique(keys[keys >= 0])))
+                           cells=tuple(int(c) for c in np.unique(keys[keys >= 0])),
+                           points=subsample(observed, self.set_points))
 
     def _not_contracting(self, state, pars, window: float) -> bool:
         """Whether the largest Lyapunov exponent from ``state`` over ``window`` is not negative (> -3 / window,
@@ -307,10 +302,17 @@ def _assemble(system: System, config: dict, results: dict) -> xr.Dataset:
         "attractor_centroid": (("attractor", "observed"), np.array([d.centroid for d in table], dtype=float)
                                .reshape(len(table), len(grid.names)),
                                mixed_units("mean of the observed coordinates on the attractor", "observed")),
+        "attractor_set": (("attractor", "set_point", "observed"),
+                          np.array([points_of(d, prob.set_points).T for d in table], dtype=float)
+                          .reshape(len(table), prob.set_points, len(grid.names)),
+                          mixed_units("the attractor as a set: one period at equal time steps (periodic), samples "
+                                      "of a long run (irregular), the point repeated (equilibrium)", "observed")),
     }
     coords = {name: (name, np.linspace(*axis), {"units": system.units_of(name),
                                                 "long_name": f"initial {name}"}) for name, axis in axes.items()}
-    coords.update({"attractor": index_coordinate("attractor", len(table), "attractor id"), **state_coordinates(system),
+    coords.update({"attractor": index_coordinate("attractor", len(table), "attractor id"),
+                   "set_point": index_coordinate("set_point", prob.set_points, "point of an attractor's set"),
+                   **state_coordinates(system),
                    **label_coordinates("observed", grid.names, [system.units_of(n) for n in grid.names],
                                        "observed coordinate of the cell grid")})
     counts = ", ".join(f"{int(np.sum(outcome == v))} {k}" for k, v in labels.items())
@@ -351,8 +353,9 @@ def basins(system: System, grid: Grid, axes: dict, *, state=None, pars=None, hor
     config = {"system": system.name, "system_key": system.key, "axes": axes, "state": list(map(float, state)),
               "pars": list(map(float, system.with_pars(pars))), "grid": grid.to_dict(), "tol": float(tol),
               "batch_size": int(batch_size), "recurrence": settings.to_dict()}
-    variables = ("att_key", "t_assign", "attractor_distance", *column_names(SystemProblem(system, grid, tol=tol)),
-                 *(f"final_{n}" for n in system.state_names), "rejection")
+    prob = SystemProblem(system, grid, tol=tol)
+    variables = ("att_key", "t_assign", "attractor_distance", *column_names(prob),
+                 *(f"final_{n}" for n in system.state_names), "rejection", *set_names(prob))
     n_points = int(np.prod([a[2] for a in axes.values()]))
     sweep = sweeps.Sweep(f"basins of {system.name}", config, n_points, int(chunk_size), variables,
                          functools.partial(basin_chunk, system), functools.partial(_assemble, system, config),

@@ -3,6 +3,7 @@ values (global continuation), and descriptions flattened into per-point columns 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 
@@ -11,6 +12,7 @@ import numpy as np
 from .mapping import MapResult
 from .problem import Problem, combine
 from .records import Description
+from .sets import set_columns, sets_from_columns
 
 
 def _union_find(n: int, pairs) -> list[int]:
@@ -108,7 +110,8 @@ def from_columns(problem: Problem, cols: dict, row: int) -> Description:
 
 def chunk_result(problem: Problem, res: MapResult, start: int) -> dict[str, np.ndarray]:
     """Per-point arrays of one chunk for a sweep: labels made unique across chunks (``att_key``), merged
-    within each group, and the description of each point's attractor as columns."""
+    within each group, and the description of each point's attractor as columns; where the problem describes
+    attractors as sets, their points as ragged columns (:func:`.sets.set_names`)."""
     index = np.full(len(res.attractors), -1, dtype=np.int64)
     descs: list[Description] = []
     for g in sorted({f.group for f in res.attractors}):
@@ -128,6 +131,8 @@ def chunk_result(problem: Problem, res: MapResult, start: int) -> dict[str, np.n
     out = {"att_key": key.astype(np.int64), "t_assign": res.t_assign,
            "attractor_distance": np.where(np.isfinite(dist), dist, -1.0)}
     out.update(to_columns(problem, point_descs))
+    if problem.set_points:
+        out.update(set_columns(problem, start * 1_000_000 + np.arange(len(descs)), descs))
     return out
 
 
@@ -141,6 +146,7 @@ def assemble_table(problem: Problem, cols: dict, groups: np.ndarray, threshold: 
     keys = np.asarray(cols["att_key"])
     groups = np.asarray(groups)
     outcome = np.where(keys < 0, keys, -999).astype(np.int64)
+    sets = sets_from_columns(problem, cols)
     table: list[Description] = []
     first_group: list[int] = []
     for g in np.unique(groups):
@@ -149,7 +155,8 @@ def assemble_table(problem: Problem, cols: dict, groups: np.ndarray, threshold: 
         if not len(ukeys):
             continue
         rows = np.flatnonzero(in_g & (keys >= 0))[first_rows]
-        descs = [from_columns(problem, cols, r) for r in rows]
+        descs = [dataclasses.replace(from_columns(problem, cols, r), points=sets.get(int(k)))
+                 for r, k in zip(rows, ukeys)]
         idx, merged = merge(problem, descs)
         m = match(problem, table, merged, threshold)
         gid = []
