@@ -119,8 +119,9 @@ def convergence(exponents, errors, n_blocks_used: int, n_blocks: int, rtol: floa
     bad = np.flatnonzero((err > allowed) & ~nonzero)
     if bad.size == 0:
         return True, ""
-    i = bad[np.argmax(err[bad] / allowed[bad])]
-    factor = 1.2 * float(np.max(err[bad] / allowed[bad])) ** 2
+    reachable = np.maximum(allowed, rtol * lam)  # a zero-looking exponent may also settle away from zero
+    i = bad[np.argmax(err[bad] / reachable[bad])]
+    factor = 1.2 * float(np.max(err[bad] / reachable[bad])) ** 2
     what = (f"zero within {ZSCORE:g} error bars, a band wider than rtol {rtol:g} of the smallest settled "
             f"|lambda| {lam[nonzero].min():.4g}" if zero[i] else f"its error bar exceeds rtol {rtol:g} of |lambda|")
     return False, (f"not converged: lambda_{i + 1} = {exponents[i]:.4g} +- {err[i]:.2g} ({what}); give "
