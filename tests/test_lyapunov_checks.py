@@ -109,6 +109,12 @@ def test_the_liouville_check_catches_an_interval_too_long_for_the_contracting_ve
     assert np.all(np.isfinite(collapsed.exponents))
 
 
+def test_the_dataset_states_the_parameters_of_the_run():
+    ab = dy.textbook_system("ab")
+    ds = dy.lyapunov_spectrum(ab, [0.7, 2.7], ab.with_pars(D=0.12), t_end=50.0)
+    assert "D = 0.12;" in ds.attrs["system_parameters"]
+
+
 def test_bad_block_requests_are_one_line_errors():
     system = dy.textbook_system("lorenz")
     with pytest.raises(ParameterError, match="n_blocks"):

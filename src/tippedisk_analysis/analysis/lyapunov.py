@@ -64,18 +64,19 @@ def tippedisk_spectrum(setup=None, initial=None, *, state=None, t_end: float = 2
               "state": None if state is None else list(map(float, x0)), "t_end": t_end, "dt": dt,
               "transient": transient, "tol": tol, "fall_angle": fall_angle, "slip_smoothing": slip_smoothing,
               "n_blocks": n_blocks, "rtol": rtol, "model": "ode-euler (reduced)"}
-    return spectrum_dataset(result, system, config)
+    return spectrum_dataset(result, system, config, pars)
 
 
 def textbook_spectrum(name: str, state, *, t_end: float = 1000.0, dt: float = 1.0, transient: float = 10.0,
                       tol: float = TOL, n_blocks: int = N_BLOCKS, rtol: float = RTOL, **pars) -> xr.Dataset:
     """The spectrum of a textbook system (e.g. ``lorenz``) over [transient, t_end] as a dataset."""
     system = textbook_system(name)
-    result = spectrum(system, state, system.with_pars(**pars), t_end=t_end, dt=dt, transient=transient, tol=tol,
+    values = system.with_pars(**pars)
+    result = spectrum(system, state, values, t_end=t_end, dt=dt, transient=transient, tol=tol,
                       n_blocks=n_blocks, rtol=rtol)
     return spectrum_dataset(result, system, {"state0": list(map(float, state)), "t_end": t_end, "dt": dt,
                                              "transient": transient, "tol": tol, "n_blocks": n_blocks, "rtol": rtol,
-                                             "pars": pars})
+                                             "pars": pars}, values)
 
 
 # ============================================================================ maps over (Omega, eps)

@@ -234,8 +234,9 @@ def _checked(exponents, errors, blocks, div_mean, full, n_blocks, rtol, window, 
     return ("completed", f"reached t_end = {t_end:g}, {window_text}") if settled else ("not_converged", reason)
 
 
-def spectrum_dataset(result: LyapunovResult, system: System, config: dict) -> xr.Dataset:
-    """A run's spectrum as a dataset of kind ``lyapunov`` (dims exponent, history, block, state)."""
+def spectrum_dataset(result: LyapunovResult, system: System, config: dict, pars=None) -> xr.Dataset:
+    """A run's spectrum as a dataset of kind ``lyapunov`` (dims exponent, history, block, state); ``pars``: the
+    runtime parameters of the run (the system's defaults if None)."""
     k = len(result.exponents)
     rate = system.per_time()
     window = float(result.history_time[-1])
@@ -269,7 +270,7 @@ def spectrum_dataset(result: LyapunovResult, system: System, config: dict) -> xr
     message = (f"{result.message}; exponents " + ", ".join(values) + shown_units
                + (f"; sum {result.exponents.sum():.8g}, mean divergence {result.divergence_mean:.8g}"
                   if math.isfinite(result.divergence_mean) else ""))
-    attrs = make_attrs("lyapunov", config, result.status, message, mode="spectrum", **system.attrs(),
+    attrs = make_attrs("lyapunov", config, result.status, message, mode="spectrum", **system.attrs(pars),
                        t_final=result.t_final, max_exponent=float(result.exponents[0]),
                        n_blocks=0 if result.errors is None else len(result.block_exponents))
     return xr.Dataset(data, coords=coords, attrs=attrs)
@@ -286,4 +287,4 @@ def lyapunov_spectrum(system: System, state, pars=None, *, t_end: float = 100.0,
                       n_blocks=n_blocks, rtol=rtol)
     config = {"state0": list(map(float, state)), "t_end": t_end, "dt": dt, "transient": transient, "tol": tol,
               "n_blocks": n_blocks, "rtol": rtol, "pars": list(map(float, system.with_pars(pars)))}
-    return spectrum_dataset(result, system, config)
+    return spectrum_dataset(result, system, config, system.with_pars(pars))
