@@ -27,10 +27,9 @@ import numpy as np
 from ..errors import ParameterError
 from .poincare import Recorder
 from .system import DIRECTIONS, Event, System
+from .zeno import ROUND_OFF, ZENO_TAIL, Departures, accumulation
 
 MAX_SWITCHES = 10_000
-ROUND_OFF = 1e-13  # a guard within this (relative to the state's size) of zero on entry is at zero
-CLEARANCE = 1e-3  # the fraction of a Taylor step the flow takes, with a guard that is at zero ignored, to leave it
 
 
 @dataclass(frozen=True)
@@ -92,6 +91,7 @@ class HybridSystem:
             for j in g.jumps:
                 self._check_jump(g, j)
         self._systems: dict = {}
+        self._jumps: dict = {}
 
     def _check_jump(self, g: Guard, j: Jump) -> None:
         if j.target not in self.modes:
@@ -126,9 +126,12 @@ class HybridSystem:
         return [j.reset[k] if k in j.reset else source.variables[source.state_index(k)] for k in target.state_names]
 
     def _jump_function(self, g: Guard, k: int):
-        j = g.jumps[k]
-        exprs = [j.when if j.when is not None else 1.0, *self.reset_expressions(g, j)]
-        return self.modes[g.mode].function(f"jump {g.name} {k}", exprs, f"the jump {g.name} -> {j.target}")
+        if (g.mode, g.name, k) not in self._jumps:  # looked up once: a run may take thousands of jumps
+            j = g.jumps[k]
+            exprs = [j.when if j.when is not None else 1.0, *self.reset_expressions(g, j)]
+            self._jumps[g.mode, g.name, k] = self.modes[g.mode].function(f"jump {g.name} {k}", exprs,
+                                                                         f"the jump {g.name} -> {j.target}")
+        return self._jumps[g.mode, g.name, k]
 
     def jump(self, mode: str, guard: str, state, pars=None) -> tuple[int, str, np.ndarray]:
         """(jump index, target mode, target state) of ``guard`` of ``mode`` at ``state``; index -1 (and the
@@ -196,6 +199,7 @@ class HybridRun:
     t_final: float
     start: tuple  # (mode, state)
     crossings: dict | None = None  # with a section: {mode: (times, states)}
+    accumulation: float | None = None  # status zeno: the time the switches accumulate at (after t_final)
 
     @property
     def modes_entered(self) -> list:
@@ -236,35 +240,11 @@ def _configure_recorder(rec: Recorder, system: System, section: dict, pars: np.n
         rec.pars = pars[: rec.q_func.nparams]
 
 
-def _leave_zeros(hybrid: HybridSystem, mode: str, t: float, x: np.ndarray, pars, tol: float, grid):
-    """(t, x) to start ``mode`` from: where a guard is zero on entry (the surface a sliding motion has just left,
-    a reset onto its own guard), heyoka would find that zero again at once, so the flow first takes
-    CLEARANCE of a Taylor step without it (as heyoka's cooldown does within one integration); a crossing of
-    that guard inside this stretch is not seen. Unchanged where no guard is at zero, or another event, or an
-    output time, falls inside."""
-    at_zero = hybrid.guards_at_zero(mode, x, pars)
-    if not at_zero:
-        return t, x
-    others = [e.name for e in hybrid.system(mode).events if e.name not in at_zero]
-    ta = copy.copy(hybrid.system(mode).taylor(tol, events=tuple(others)))
-    ta.pars[:] = pars[: len(ta.pars)]
-    ta.time, ta.state[:] = t, x
-    h = abs(ta.step(write_tc=False)[1])
-    dt = CLEARANCE * (h if math.isfinite(h) else 1.0)  # an infinite step: a polynomial flow (one time unit)
-    if grid is not None and np.any((grid > t) & (grid <= t + dt)):
-        dt = 0.5 * float(grid[grid > t].min() - t)
-    ta.time, ta.state[:] = t, x
-    if others:
-        ta.reset_cooldowns()
-    outcome = ta.step(max_delta_t=dt, write_tc=False)[0]
-    if outcome not in (hy.taylor_outcome.success, hy.taylor_outcome.time_limit) or not np.all(np.isfinite(ta.state)):
-        return t, x
-    return float(ta.time), np.array(ta.state)
-
-
 def simulate_hybrid(hybrid: HybridSystem, mode: str, state, t_end: float, *, pars=None, grid=None, tol: float = 1e-13,
-             max_switches: int = MAX_SWITCHES, section: dict | None = None) -> HybridRun:
-    """Integrate from ``state`` in ``mode`` to ``t_end``, jump to jump.
+                    max_switches: int = MAX_SWITCHES, section: dict | None = None) -> HybridRun:
+    """Integrate from ``state`` in ``mode`` to ``t_end``, jump to jump; each mode is entered past its guards'
+    zeros without skipping a crossing (:mod:`.zeno`), and switch times that accumulate end the run ``zeno``
+    at the last switch, ``run.accumulation`` holding the extrapolated time.
 
     grid: output times (the run's samples inside each segment; each segment also holds its end state); without
     one a segment holds its start and end. section: {"quantity", "level", "modulo", "direction", "transient"}
@@ -283,42 +263,58 @@ def simulate_hybrid(hybrid: HybridSystem, mode: str, state, t_end: float, *, par
     if x.shape != (hybrid.system(mode).n,):
         raise ParameterError(f"mode {mode!r} has {hybrid.modes[mode].n} states, not {x.size}")
     grid = None if grid is None else np.asarray(grid, dtype=float)
+    departures = Departures(hybrid, tol, pars)
     run = HybridRun([], [], "completed", f"reached t_end = {t_end:g}", 0.0, (mode, x.copy()))
     t = 0.0
     while True:
-        t, x = _leave_zeros(hybrid, mode, t, x, pars, tol, grid)
-        ta = integrators[mode]
-        ta.time, ta.state[:] = t, x
-        ta.reset_cooldowns()
-        if grid is None:
-            res = ta.propagate_until(float(t_end))
-            seg_time, out = np.array([t]), x[None, :].copy()
-        else:
-            times = np.concatenate([[t], grid[(grid > t) & (grid <= t_end)]])
-            res = ta.propagate_grid(times)
-            first = 0 if not run.segments else 1  # a later segment's start is the previous segment's end
-            out = np.asarray(res[-1])[first:]
-            seg_time = times[first:first + len(out)]
-        outcome = res[0]
-        if outcome == hy.taylor_outcome.time_limit:
-            if grid is None:
-                seg_time, out = np.append(seg_time, ta.time), np.vstack([out, ta.state])
-            run.segments.append(Segment(mode, seg_time, out))
-            t = float(ta.time)
-            break
-        start, t, x = x, float(ta.time), np.array(ta.state)
-        if not (np.all(np.isfinite(x)) and math.isfinite(t)):
-            last = float(seg_time[-1]) if len(seg_time) else float(run.segments[-1].time[-1]) if run.segments else 0.0
+        entry_t, entry_x = t, x
+        head = [(t, x)] if grid is None or not run.segments else []  # a later segment's start: the last one's end
+        dep = departures.depart(mode, t, x, t_end, grid)
+        if dep.status == "nonfinite":
             run.status = "nonfinite"
-            run.message = f"the state became non-finite after t = {last:.6g}; try a smaller tol"
-            if not run.segments and not len(out):
-                seg_time, out = np.array([0.0]), start[None, :]
-            run.segments.append(Segment(mode, seg_time, out))
-            t = last
+            run.message = (f"the Taylor coefficients became non-finite at t = {t:.6g} in mode {mode}: the state or "
+                           "the parameters overflow the equations; give smaller ones")
+            run.segments.append(Segment(mode, np.array([t]), x[None, :].copy()))
             break
-        run.segments.append(Segment(mode, np.append(seg_time, t), np.vstack([out, x])))
+        head += dep.samples
+        t, x = dep.time, dep.state
+        if dep.fired is not None:
+            index, outcome = dep.fired, None
+            seg_time, out = [p[0] for p in head], [p[1] for p in head]
+        else:
+            ta = integrators[mode]
+            ta.time, ta.state[:] = t, x
+            if ta.with_events:
+                ta.reset_cooldowns()
+            if grid is None:
+                res = ta.propagate_until(float(t_end))
+                seg_time, out = [p[0] for p in head], [p[1] for p in head]
+            else:
+                times = np.concatenate([[t], grid[(grid > t) & (grid <= t_end)]])
+                res = ta.propagate_grid(times)
+                grid_out = list(np.asarray(res[-1])[1:])
+                seg_time = [p[0] for p in head] + list(times[1:1 + len(grid_out)])
+                out = [p[1] for p in head] + grid_out
+            outcome = res[0]
+            if outcome == hy.taylor_outcome.time_limit:
+                if grid is None:
+                    seg_time, out = seg_time + [ta.time], out + [np.array(ta.state)]
+                run.segments.append(Segment(mode, np.array(seg_time), _rows(out, x)))
+                t = float(ta.time)
+                break
+            t, x = float(ta.time), np.array(ta.state)
+            if not (np.all(np.isfinite(x)) and math.isfinite(t)):
+                last = seg_time[-1] if seg_time else run.segments[-1].time[-1] if run.segments else entry_t
+                run.status = "nonfinite"
+                run.message = f"the state became non-finite after t = {last:.6g}; try a smaller tol"
+                if not run.segments and not out:
+                    seg_time, out = [entry_t], [entry_x]
+                run.segments.append(Segment(mode, np.array(seg_time, dtype=float), _rows(out, entry_x)))
+                t = last
+                break
+            index = System.stopping_event(outcome, hybrid.system(mode).events)
+        run.segments.append(Segment(mode, np.array(seg_time + [t]), _rows(out + [x], x)))
         events = hybrid.system(mode).events
-        index = System.stopping_event(outcome, events)
         if index is None:
             run.status, run.message = "failed", f"heyoka stopped with {outcome!r} at t = {t:.6g}"
             break
@@ -338,9 +334,29 @@ def simulate_hybrid(hybrid: HybridSystem, mode: str, state, t_end: float, *, par
             break
         run.switches.append(Switch(t, mode, guard, k, target, x, after))
         mode, x = target, after
+        found = accumulation([s.time for s in run.switches[-ZENO_TAIL:]], run.segments[0].time[0])
+        if found is not None:
+            run.status, run.accumulation = "zeno", found[0]
+            run.message = _zeno_message(found, t, guard)
+            break
     run.t_final = t
     if section is not None:
         run.crossings = {m: (np.array(ta.nt_events[0].callback.times),
                              np.array(ta.nt_events[0].callback.states).reshape(-1, hybrid.modes[m].n))
                          for m, ta in integrators.items()}
     return run
+
+
+def _rows(states: list, like: np.ndarray) -> np.ndarray:
+    """(samples, n) from a list of states (an empty (0, n) for none)."""
+    return np.array(states, dtype=float).reshape(-1, like.size)
+
+
+def _zeno_message(found: tuple, t: float, guard: str) -> str:
+    t_z, per_cycle, ratio = found
+    if ratio == 0.0:
+        return (f"switches accumulate at t = {t_z:.10g}: the last of them fall within round-off of that instant "
+                f"(guard {guard!r}; the motion stays on it: declare a mode that holds it, e.g. sticking or sliding)")
+    cycle = "switch" if per_cycle == 1 else f"{per_cycle} switches"
+    return (f"switches accumulate at t = {t_z:.10g} (intervals shrink by {ratio:.6g} per {cycle}); the run stops at "
+            f"the last switch, t = {t:.10g}, before it (continue past it with a mode that holds the motion there)")

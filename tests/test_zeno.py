@@ -1,0 +1,100 @@
+"""Hybrid runs never pass through a guard, and switch times that accumulate end a run with status zeno: a ball
+bouncing on a floor against the closed form (impacts t_k = t1 (1 + 2 e (1 - e^(k-1)) / (1 - e)), accumulating at
+t_z = t1 (1 + 2 e / (1 - e)), t1 = sqrt(2 h0 / g)), an elastic ball hopping a micrometre (every flight shorter
+than the blind stretch a jump used to skip), a hop below round-off, and the disk's hybrid-euler."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+
+import heyoka as hy
+import numpy as np
+import pytest
+
+from tippedisk_analysis import dynamics as dy
+
+G = 9.81
+
+
+def ball(restitution: float) -> dy.HybridSystem:
+    """z'' = -g above the floor z = 0; an impact sets v -> -e v."""
+    z, v = hy.make_vars("z", "v")
+    g, e = hy.par[0], hy.par[1]
+    flight = dy.System("flight", [z, v], [v, -g + 0.0 * z], {"g": G, "e": restitution}, strict_parameters=False)
+    return dy.HybridSystem("ball", {"flight": flight}, [dy.Guard("impact", "flight", z, dy.Jump("flight", {"v": -e * v}))])
+
+
+def impact_times(h0: float, e: float, count: int) -> np.ndarray:
+    t1 = math.sqrt(2 * h0 / G)
+    k = np.arange(1, count + 1)
+    return t1 * (1 + 2 * e * (1 - e ** (k - 1)) / (1 - e)) if e != 1 else t1 * (2 * k - 1)
+
+
+def samples(run) -> tuple[np.ndarray, np.ndarray]:
+    return (np.concatenate([s.time for s in run.segments]), np.vstack([s.states for s in run.segments]))
+
+
+def test_a_bouncing_ball_ends_zeno_at_the_accumulation_time():
+    e, h0 = 0.8, 1.0
+    t_z = math.sqrt(2 * h0 / G) * (1 + 2 * e / (1 - e))  # 4.0637 s
+    run = dy.simulate_hybrid(ball(e), "flight", np.array([h0, 0.0]), 20.0, grid=np.linspace(0.0, 20.0, 2001))
+    assert run.status == "zeno", run.message
+    assert abs(run.accumulation - t_z) < 1e-6 * t_z and run.t_final < t_z
+    assert f"{run.accumulation:.6g}" in run.message
+    times = np.array([s.time for s in run.switches])
+    assert np.abs(times[:20] - impact_times(h0, e, 20)).max() < 1e-10
+    assert run.switches[-1].time == run.t_final  # the run ends after the last impact it resolved, before t_z
+    _t, x = samples(run)
+    assert x[:, 0].min() > -1e-12  # never below the floor
+
+
+def test_an_elastic_ball_hopping_a_micrometre_bounces_to_the_end():
+    """Each flight (0.9 ms) is shorter than the 1e-3 time units a jump used to skip blind: no impact is missed,
+    the energy g z + v^2 / 2 stays g h0."""
+    h0 = 1e-6
+    run = dy.simulate_hybrid(ball(1.0), "flight", np.array([h0, 0.0]), 0.2)  # segments: their start and end
+    assert run.status == "completed" and run.t_final == 0.2, run.message
+    expected = impact_times(h0, 1.0, 500)
+    expected = expected[expected < 0.2]
+    times = np.array([s.time for s in run.switches])
+    assert len(times) == len(expected) == 221 and np.abs(times - expected).max() < 1e-12
+    _t, x = samples(run)
+    assert x[:, 0].min() > -1e-15
+    assert np.abs(G * x[:, 0] + x[:, 1] ** 2 / 2 - G * h0).max() < 1e-15
+
+
+def test_a_hop_below_round_off_is_not_a_fall_through_the_floor():
+    """A jump to v = 1e-7 m/s rises 5e-16 m, under the guard's round-off: the ball stays on the floor and the run
+    says so (zeno at once), never falling below it."""
+    run = dy.simulate_hybrid(ball(1.0), "flight", np.array([0.0, 1e-7]), 1.0, grid=np.linspace(0.0, 1.0, 11))
+    assert run.status == "zeno" and "round-off" in run.message, run.message
+    assert run.accumulation == pytest.approx(0.0, abs=1e-9)
+    _t, x = samples(run)
+    assert x[:, 0].min() > -1e-12
+
+
+def test_a_mode_without_events_runs_to_the_end():
+    x = hy.make_vars("x")
+    decay = dy.System("decay", [x], [-x])
+    run = dy.simulate_hybrid(dy.HybridSystem("decay", {"only": decay}, []), "only", np.array([1.0]), 2.0)
+    assert run.status == "completed" and run.segments[-1].states[-1, 0] == pytest.approx(math.exp(-2.0), rel=1e-12)
+
+
+def test_overflowing_hybrid_runs_say_nonfinite_without_heyoka_log_lines(tmp_path):
+    """heyoka logs 'event detection skipped due to an invalid timestep value of nan' (to the C stdout, flushed
+    at exit: hence a process of its own) where a step's Taylor coefficients overflow; a run reads them off an
+    event-free step first and ends nonfinite in the package's one line."""
+    script = "; ".join([
+        "import sys", "from tippedisk_analysis.cli import main",
+        f"codes = [main(a + ['-o', r'{tmp_path}/' + str(i) + '.nc']) for i, a in enumerate({RUNS!r})]",
+        "sys.exit(0 if codes == [1, 1] else 3)"])
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "heyoka" not in done.stdout + done.stderr
+    assert done.stdout.count("non-finite") == 2 and not done.stderr.strip()
+
+
+RUNS = [["simulate", "--model", "h1", "--t-end", "0.1", "--mu", "1e300"],
+        ["poincare", "--model", "h1", "--omega", "1e150"]]
