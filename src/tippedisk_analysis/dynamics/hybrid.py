@@ -8,9 +8,10 @@ or no condition) into the jump's target mode. The target's states are set by ``r
 expression of the source states}; a target state that ``reset`` does not name keeps the source state of the
 same name, so an empty reset is the identity.
 
-:func:`simulate_hybrid` integrates event to event; the modes' own terminal events (a System's ``events``) end a run
-with their name as status, more than ``max_switches`` jumps with ``zeno``, a guard none of whose jumps applies
-with ``no_jump``. Sections across modes (:func:`simulate_hybrid` with ``section``) are recorded by every mode's
+:func:`simulate_hybrid` integrates event to event, entering each mode past its guards' zeros without skipping a
+crossing (:mod:`.zeno`); the modes' own terminal events (a System's ``events``) end a run with their name as
+status, switch times that accumulate (or more than ``max_switches`` jumps) with ``zeno``, a guard none of whose
+jumps applies with ``no_jump``, Taylor coefficients that overflow with ``nonfinite``. Sections across modes (:func:`simulate_hybrid` with ``section``) are recorded by every mode's
 integrator. Periodic orbits by multi-segment shooting with saltation matrices: :mod:`.hybrid_orbits`;
 Filippov sliding from the two sides of a switching surface: :mod:`.filippov`.
 """

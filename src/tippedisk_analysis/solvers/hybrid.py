@@ -4,8 +4,10 @@ from event to event and the sections across modes are the generic ones (:mod:`ti
 This module turns a run into the package's simulation dataset.
 
 lambda_N falling through 0 ends a run with status ``lift_off`` (outside the model, as in ODE Models 1/2; a
-Moreau model follows it); the tilt reaching ``fall_angle`` with ``fell``. More than ``max_switches`` mode
-changes end it with ``zeno`` (switches accumulating: the model cannot continue).
+Moreau model follows it); the tilt reaching ``fall_angle`` with ``fell``. Mode switches that accumulate (their
+intervals shrinking geometrically, or many within round-off of one instant) end it with ``zeno`` at the last
+switch, the message giving the accumulation time; so do more than ``max_switches`` mode changes. A mode is
+entered on a guard's zero (rolling entered on the cone) without skipping a crossing: :mod:`tippedisk_analysis.dynamics.zeno`.
 """
 
 from __future__ import annotations
@@ -64,7 +66,7 @@ def integrate(setup: Setup, initial: InitialState, t_end: float, dt_output: floa
     elif run.status == "lift_off":
         run.message = (f"lambda_N fell through 0 at t = {t:.6g} s: the disk lifts off, outside the bilateral model "
                        "(a Moreau model follows it)")
-    elif run.status == "zeno":
+    elif run.status == "zeno" and run.accumulation is None:
         run.message = (f"more than {max_switches} mode switches by t = {t:.6g} s (switches accumulate); the "
                        "event-driven model cannot continue")
     elif run.status == "nonfinite":
