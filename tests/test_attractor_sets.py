@@ -100,3 +100,72 @@ def test_sets_distinguish_closed_curves_of_one_centre_and_join_two_samplings_of_
     assert not at.sets.same_set(grid, cycle(1.0), cycle(1.2), 1.5)
     assert at.sets.set_distance(grid, cycle(1.0), cycle(1.2)) == pytest.approx(4.0, rel=1e-3)
     assert not at.sets.same_set(grid, cycle(1.0), cycle(1.0, period=4 * math.pi), 1.5)
+
+
+def henon_heiles(integral: bool = True) -> dy.System:
+    """H = (px^2 + py^2 + x^2 + y^2) / 2 + x^2 y - y^3 / 3: bounded motion below the escape energy 1/6."""
+    energy = (px * px + py * py + x * x + y * y) / 2 + x * x * y - y * y * y / 3
+    return dy.System("henon_heiles", [x, y, px, py], [px, py, -x - 2 * x * y, -y - x * x + y * y],
+                     integrals={"H": energy} if integral else None)
+
+
+HH_GRID = dy.Grid(("x", "y", "px", "py"), (-1, -1, -1, -1), (1, 1.5, 1, 1), (20, 25, 20, 20))
+HH_AXES = {"x": (-0.3, 0.3, 11), "y": (-0.3, 0.3, 11)}
+
+
+@pytest.mark.parametrize("integral", [True, False])
+def test_henon_heiles_is_conservative_with_no_attractors_and_the_energy_of_each_start(integral):
+    """Before: three irregular 'attractors' (0.752 / 0.198 / 0.050) holding starts of different energies, the
+    resting start on the centre among them. Now the status says conservative, the table is empty, every start is
+    bounded (H < 1/6), and the stored level is H at the start (exact formula), conserved along the run."""
+    ds = dy.basins(henon_heiles(integral), HH_GRID, HH_AXES, horizon=200.0, progress=False)
+    assert ds.attrs["status"] == "conservative" and "no attractors" in ds.attrs["message"]
+    assert "\n" not in ds.attrs["message"] and ds.sizes["attractor"] == 0
+    flags = dict(zip(ds.outcome.attrs["flag_meanings"].split(), ds.outcome.attrs["flag_values"]))
+    assert np.all(ds.outcome.values == flags["bounded"])
+    np.testing.assert_allclose(ds.assignment_time.values, 200.0)
+    assert np.all(ds.divergence_mean.values == 0.0)
+    if integral:
+        X, Y = np.meshgrid(np.linspace(*HH_AXES["x"]), np.linspace(*HH_AXES["y"]), indexing="ij")
+        energy = (X**2 + Y**2) / 2 + X**2 * Y - Y**3 / 3
+        np.testing.assert_allclose(ds.integral_level.sel(integral="H").values, energy, rtol=1e-14, atol=1e-16)
+        assert float(ds.integral_drift.max()) < 1e-9
+    else:
+        assert "integral_level" not in ds
+
+
+def test_lotka_volterra_centre_is_conservative_though_its_divergence_is_not_zero_pointwise():
+    """x' = x (1 - y), y' = y (x - 1): div f = x - y, zero only on average over an orbit (d/dt log(x y)); the levels
+    of V = x - log x + y - log y are those of the starts."""
+    v = x - hy.log(x) + y - hy.log(y)
+    s = dy.System("lotka_volterra", [x, y], [x * (1 - y), y * (x - 1)], integrals={"V": v})
+    axes = {"x": (0.3, 2.5, 8), "y": (0.3, 2.5, 8)}
+    ds = dy.basins(s, dy.Grid(("x", "y"), (0, 0), (8, 8), (80, 80)), axes, horizon=300.0, progress=False)
+    assert ds.attrs["status"] == "conservative" and ds.sizes["attractor"] == 0
+    X, Y = np.meshgrid(np.linspace(*axes["x"]), np.linspace(*axes["y"]), indexing="ij")
+    np.testing.assert_allclose(ds.integral_level.sel(integral="V").values, X - np.log(X) + Y - np.log(Y),
+                               rtol=1e-14)
+
+
+@pytest.mark.parametrize("delta", [1e-3, 0.02])
+def test_a_weakly_damped_oscillator_keeps_its_attractor(delta):
+    """x'' + delta x' + x = 0: the divergence is -delta everywhere, with no scatter: never conservative, however
+    small delta; the origin is the one attractor."""
+    s = dy.System("damped", [x, y], [y, -hy.par[0] * y - x], parameters={"delta": delta})
+    volume = at.conservative.volume_test(at.system_problem.SystemProblem(s, dy.Grid(("x", "y"), (-3, -3), (3, 3),
+                                                                                      (60, 60))),
+                                         at.RecurrenceSettings(horizon=100.0), {"x": (-2.0, 2.0, 9)}, [0.0, 0.0],
+                                         s.pars, 4)
+    assert not volume.conservative
+    np.testing.assert_allclose(volume.divergence, -delta, rtol=1e-9)
+
+
+def test_a_volume_test_too_short_for_its_runs_does_not_decide():
+    """Runs shorter than the blocks' two correlation times tell nothing: the test is undecided (not conservative),
+    and says so."""
+    s = dy.System("lotka_volterra", [x, y], [x * (1 - y), y * (x - 1)])
+    volume = at.conservative.volume_test(at.system_problem.SystemProblem(s, dy.Grid(("x", "y"), (0, 0), (8, 8),
+                                                                                      (80, 80))),
+                                         at.RecurrenceSettings(horizon=10.0), {"x": (0.3, 2.5, 8)}, [0.0, 1.0],
+                                         s.pars, 4)
+    assert not volume.conservative and "could not decide" in volume.message

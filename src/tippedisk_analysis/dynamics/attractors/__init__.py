@@ -1,8 +1,10 @@
 """Attractors found by recurrences in a cell grid: a generic core that knows nothing of the disk.
 
 Modules: :mod:`.records` (grid, settings, descriptions), :mod:`.problem` (the contract and the generic
-description), :mod:`.mapping` (the state machine), :mod:`.tables` (merging, matching, columns),
-:mod:`.system_problem` (the problem of any :class:`~tippedisk_analysis.dynamics.System` and its basins).
+description), :mod:`.mapping` (the state machine), :mod:`.tables` (merging, matching, columns), :mod:`.sets`
+(attractors compared as sets), :mod:`.system_problem` (the problem of any
+:class:`~tippedisk_analysis.dynamics.System` and its basins), :mod:`.conservative` (the volume test: conservative
+flows have no attractors).
 
 The method is the one of Datseris & Wagemakers (Chaos 32, 023104, 2022) used by Attractors.jl's
 ``AttractorsViaRecurrences``: integrate an initial condition, sample it every ``dt``, map each sample
@@ -54,11 +56,13 @@ Problems may add kinds (the tippedisk adds ``rolling``).
 
 Parameter groups: runs with the same ``group`` number share their attractor cells (same parameters);
 different groups never do. Attractors of different groups, chunks or parameter values are identified
-afterwards by :func:`merge` (within one parameter point: the problem's ``same_attractor``) and
+afterwards by :func:`merge` (within one parameter point: the problem's ``same_attractor``, as sets where the
+problem describes attractors by points, :attr:`Problem.set_points`; never by centre and kind alone) and
 :func:`match` (across parameter values, "global continuation": nearest by the problem's distance,
 within a threshold, each previous attractor used at most once; unmatched ones get new ids).
 """
 
+from . import sets
 from .mapping import MapResult, map_points
 from .problem import (DescribeContext, Problem, circular_mean, combine, converging, describe,
                       equilibrium_description, growing, spreads)
@@ -69,4 +73,4 @@ __all__ = ["BASE_KINDS", "SPECIAL_LABELS", "Candidate", "DescribeContext", "Desc
            "MapResult", "Problem", "RecurrenceSettings", "assemble_table", "chunk_result", "circular_mean",
            "column_names", "combine",
            "converging", "describe", "equilibrium_description", "from_columns", "growing", "map_points", "match",
-           "merge", "spreads", "to_columns"]
+           "merge", "sets", "spreads", "to_columns"]

@@ -10,7 +10,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from .records import BASE_KINDS, DIVERGED, SPECIAL_LABELS, Candidate, Description, FirstTime, Grid, RecurrenceSettings
-from .sets import same_set, set_distance, subsample
+from .sets import arc_subsample, same_set, set_distance, subsample
 
 
 # --------------------------------------------------------------------------------------- problems
@@ -283,7 +283,7 @@ def periodic_description(problem: Problem, state, pars, guess: float, core: Desc
     whole = ys[:, ts <= ts[0] + period * math.floor((ts[-1] - ts[0]) / period)]  # whole periods
     centroid = circular_mean(grid, whole)
     spread = 0.5 * np.ptp(grid.unwrap(whole), axis=1) * grid.widths
-    points = subsample(ys[:, ts < ts[0] + period], problem.set_points) if problem.set_points else None
+    points = arc_subsample(grid, ys[:, ts < ts[0] + period], problem.set_points) if problem.set_points else None
     return Description("periodic", problem.represent(state), centroid, spread, amplitude, period, points=points)
 
 

@@ -19,7 +19,13 @@ BASE_KINDS = ("equilibrium", "periodic", "irregular")
 @dataclasses.dataclass(frozen=True)
 class Grid:
     """Cells of the observed coordinates: per dimension [lower, upper) cut into ``cells`` equal cells;
-    periodic dimensions wrap (period upper - lower)."""
+    periodic dimensions wrap (period upper - lower).
+
+    ``names``: states or observables that tell the attractors apart (a projection in which two attractors
+    cross makes them share cells: observe a forced system's phase); ``lower``/``upper``: a box holding every
+    attractor and most transients (a run outside it for ``consecutive_lost_steps`` samples is ``left_grid``);
+    ``cells``: fine enough that distinct attractors lie more than ``Problem.merge_distance`` (1.5) cells apart,
+    coarse enough that a run on an attractor revisits its cells within the recurrence window."""
 
     names: tuple[str, ...]
     lower: tuple[float, ...]

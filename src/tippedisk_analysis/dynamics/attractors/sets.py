@@ -1,12 +1,12 @@
 """Attractors compared as sets, not by centre and kind (concentric cycles and the small and large responses of a
 forced oscillator share a centre).
 
-A description's ``points`` (D, M) hold the attractor in observed coordinates: a periodic attractor as M states at
-equal time steps over one period (a closed curve), an irregular one as M samples of a long run on it; an
+A description's ``points`` (D, M) hold the attractor in observed coordinates: a periodic attractor as M states of
+one period at about equal arc length (a closed curve), an irregular one as M samples of a long run on it; an
 equilibrium is its own point (its centroid). Distances are Euclidean in cell units (:meth:`Grid.difference`,
 periodic dimensions the short way round):
 
-* closed curves: the symmetric Hausdorff distance between a's points and b's closed polyline and back;
+* closed curves (points at about equal arc length, :func:`arc_subsample`): the symmetric Hausdorff distance between a's points and b's closed polyline and back;
   two periodic attractors are one when it is at most ``merge_distance`` cells and their periods agree to
   :data:`PERIOD_RTOL`;
 * clouds (irregular): the median distance of a point of a from the nearest point of b, against the median
@@ -32,6 +32,18 @@ def subsample(observed: np.ndarray, m: int) -> np.ndarray:
     """m columns of ``observed`` (D, L) at equal index steps (repeated ones where L < m)."""
     L = observed.shape[1]
     return np.array(observed[:, np.linspace(0, L, m, endpoint=False).astype(int)], dtype=float)
+
+
+def arc_subsample(grid: Grid, observed: np.ndarray, m: int) -> np.ndarray:
+    """m of the samples ``observed`` (D, L) of a closed orbit (dense, one period) at about equal arc length in cell
+    units: two samplings of one orbit then differ by little more than a cell also where it jumps fast."""
+    step = np.sqrt(np.sum(grid.difference(np.roll(observed, -1, axis=1), observed) ** 2, axis=0))
+    arc = np.concatenate([[0.0], np.cumsum(step[:-1])])
+    perimeter = arc[-1] + step[-1]
+    if not perimeter > 0:
+        return subsample(observed, m)
+    index = np.searchsorted(arc, np.linspace(0.0, perimeter, m, endpoint=False), side="right") - 1
+    return np.array(observed[:, np.clip(index, 0, observed.shape[1] - 1)], dtype=float)
 
 
 def curve_gap(grid: Grid, a: np.ndarray, b: np.ndarray) -> float:

@@ -14,6 +14,7 @@ scheduler; finished chunks are kept next to ``output``).
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import functools
 import math
@@ -29,10 +30,11 @@ from ..flows import STABILITY
 from ..lyapunov import spectrum
 from ..orbits import find_orbit
 from ..system import System
+from . import conservative
 from .mapping import map_points
 from .problem import Problem, circular_mean, closest_return, describe, equilibrium_description
 from .records import BASE_KINDS, Candidate, Description, Grid, RecurrenceSettings
-from .sets import points_of, set_names, subsample
+from .sets import arc_subsample, points_of, set_names, subsample
 from .tables import assemble_table, chunk_result, column_names
 
 TOL = 1e-10  # Taylor tolerance of the runs: classifications, not trajectories to round-off
@@ -40,7 +42,8 @@ NEWTON_STEPS = 30  # Newton iterations towards an equilibrium
 RESIDUAL_TOL = 1e-12  # |f| / state_scale of an equilibrium, relative to the size of its terms
 PERIOD_RTOL = 1e-3  # the shooting period of a periodic attractor against the recorded return time
 NEIGHBOURHOOD = 2.0  # cells (max-norm) around an equilibrium that become its cells
-SET_POINTS = 64  # points of a periodic or irregular attractor's set (:mod:`.sets`)
+SET_POINTS = 128  # points of a periodic or irregular attractor's set (:mod:`.sets`)
+DENSE_SAMPLES = 4096  # samples of one period from which a periodic attractor's points are taken by arc length
 LONG_WINDOWS = 10  # an irregular candidate's run goes on this many locate windows in search of a return
 RETURN_REFERENCES = 8  # samples of the long run's second half tried as the state a return comes back to
 
@@ -121,7 +124,15 @@ class SystemProblem(Problem):
             return None
         spread = 0.5 * np.ptp(self.grid.unwrap(observed), axis=1) * self.grid.widths  # the long run's, not the window's
         return dataclasses.replace(desc, centroid=circular_mean(self.grid, observed), spread=spread,
-                                   points=subsample(observed, self.set_points))
+                                   points=arc_subsample(self.grid, self.observe(dense, pars), self.set_points))
+
+    def _one_period(self, state, period: float, pars) -> np.ndarray:
+        """(n, DENSE_SAMPLES) states of the orbit through ``state`` at equal time steps over one ``period``."""
+        ta = copy.copy(self.system.taylor(self.tol))
+        ta.time, ta.state[:] = 0.0, state
+        if ta.pars.size:
+            ta.pars[:] = np.asarray(pars, dtype=float)[: ta.pars.size]
+        return ta.propagate_grid(np.linspace(0.0, period, DENSE_SAMPLES, endpoint=False))[-1].T
 
     def _with_neighbourhood(self, desc: Description, observed) -> Description:
         """An equilibrium with the cells of the samples ``observed`` (D, L) within NEIGHBOURHOOD cells of it as
@@ -206,6 +217,7 @@ class SystemProblem(Problem):
             self._reject("unstable_orbit")
             return None
         observed = self.observe(orbit.samples.T, pars)
+        dense = self._one_period(orbit.states[0], float(orbit.period), pars)
         unwrapped = self.grid.unwrap(observed)
         keys = self.grid.keys(observed)
         k = self.amplitude_index
@@ -213,7 +225,15 @@ class SystemProblem(Problem):
                            0.5 * np.ptp(unwrapped, axis=1) * self.grid.widths,
                            0.5 * float(np.ptp(unwrapped[k])) * self.grid.widths[k], float(orbit.period),
                            cells=tuple(int(c) for c in np.unique(keys[keys >= 0])),
-                           points=subsample(observed, self.set_points))
+                           points=arc_subsample(self.grid, self.observe(dense, pars), self.set_points))
+
+    def _one_period(self, state, period: float, pars) -> np.ndarray:
+        """(n, DENSE_SAMPLES) states of the orbit through ``state`` at equal time steps over one ``period``."""
+        ta = copy.copy(self.system.taylor(self.tol))
+        ta.time, ta.state[:] = 0.0, state
+        if ta.pars.size:
+            ta.pars[:] = np.asarray(pars, dtype=float)[: ta.pars.size]
+        return ta.propagate_grid(np.linspace(0.0, period, DENSE_SAMPLES, endpoint=False))[-1].T
 
     def _not_contracting(self, state, pars, window: float) -> bool:
         """Whether the largest Lyapunov exponent from ``state`` over ``window`` is not negative (> -3 / window,
@@ -267,26 +287,11 @@ def basin_chunk(system: System, config: dict, start: int, stop: int) -> dict:
     return out
 
 
-def _assemble(system: System, config: dict, results: dict) -> xr.Dataset:
-    grid = Grid.from_dict(config["grid"])
-    prob = SystemProblem(system, grid, tol=float(config["tol"]))
-    n = int(np.prod([a[2] for a in config["axes"].values()]))
-    outcome, table, _first = assemble_table(prob, results, np.zeros(n, dtype=np.int64), 1.0)
-    axes = config["axes"]
-    dims = tuple(axes)
-    shape = tuple(int(a[2]) for a in axes.values())
-    labels = prob.labels()
-    flag_values = np.array(sorted(labels.values()) + list(range(len(table))), dtype=np.int16)
-    flag_meanings = " ".join([k for k, _ in sorted(labels.items(), key=lambda kv: kv[1])]
-                             + [f"A{i}_{d.kind}" for i, d in enumerate(table)])
-    data = {
-        "outcome": (dims, outcome.reshape(shape).astype(np.int16), {
-            "units": "1", "long_name": "attractor id (>= 0, see dimension attractor) or negative label",
-            "flag_values": flag_values, "flag_meanings": flag_meanings}),
-        "assignment_time": (dims, np.asarray(results["t_assign"]).reshape(shape), {
-            "units": system.time_units,
-            "long_name": "time at which the run was assigned to an attractor or labelled"}),
-        "basin_fraction": ("attractor", np.array([np.mean(outcome == i) for i in range(len(table))]),
+def _table(system: System, prob: SystemProblem, table: list, outcome: np.ndarray) -> dict:
+    """The attractor table's variables (dimension ``attractor``; empty for a conservative flow)."""
+    grid, m = prob.grid, len(table)
+    return {
+        "basin_fraction": ("attractor", np.array([np.mean(outcome == i) for i in range(m)], dtype=float),
                            {"units": "1", "long_name": "share of the initial conditions in the basin"}),
         "attractor_kind": ("attractor", np.array([BASE_KINDS.index(d.kind) for d in table], dtype=np.int8),
                            flag_attrs("kind of attractor", {k: i for i, k in enumerate(BASE_KINDS)})),
@@ -297,24 +302,57 @@ def _assemble(system: System, config: dict, results: dict) -> xr.Dataset:
                                 {"units": system.units_of(grid.names[0]),
                                  "long_name": "half peak-to-peak of the first observed coordinate"}),
         "attractor_state": (("attractor", "state"), np.array([d.representative for d in table], dtype=float)
-                            .reshape(len(table), system.n),
+                            .reshape(m, system.n),
                             mixed_units("a state on the attractor (equilibria: the settled state)")),
         "attractor_centroid": (("attractor", "observed"), np.array([d.centroid for d in table], dtype=float)
-                               .reshape(len(table), len(grid.names)),
+                               .reshape(m, len(grid.names)),
                                mixed_units("mean of the observed coordinates on the attractor", "observed")),
         "attractor_set": (("attractor", "set_point", "observed"),
                           np.array([points_of(d, prob.set_points).T for d in table], dtype=float)
-                          .reshape(len(table), prob.set_points, len(grid.names)),
+                          .reshape(m, prob.set_points, len(grid.names)),
                           mixed_units("the attractor as a set: one period at equal time steps (periodic), samples "
                                       "of a long run (irregular), the point repeated (equilibrium)", "observed")),
     }
+
+
+def _coordinates(system: System, prob: SystemProblem, axes: dict, m: int) -> dict:
     coords = {name: (name, np.linspace(*axis), {"units": system.units_of(name),
                                                 "long_name": f"initial {name}"}) for name, axis in axes.items()}
-    coords.update({"attractor": index_coordinate("attractor", len(table), "attractor id"),
+    coords.update({"attractor": index_coordinate("attractor", m, "attractor id"),
                    "set_point": index_coordinate("set_point", prob.set_points, "point of an attractor's set"),
                    **state_coordinates(system),
-                   **label_coordinates("observed", grid.names, [system.units_of(n) for n in grid.names],
+                   **label_coordinates("observed", prob.grid.names, [system.units_of(n) for n in prob.grid.names],
                                        "observed coordinate of the cell grid")})
+    return coords
+
+
+def _outcome(labels: dict, table: list, values: np.ndarray, dims: tuple, shape: tuple, long_name: str) -> tuple:
+    """``outcome``: categorical int16 (attractor ids >= 0 where there is a table) with flag_values/meanings."""
+    order = sorted(labels.items(), key=lambda kv: kv[1])
+    flag_values = np.array([v for _k, v in order] + list(range(len(table))), dtype=np.int16)
+    flag_meanings = " ".join([k for k, _v in order] + [f"A{i}_{d.kind}" for i, d in enumerate(table)])
+    return (dims, np.asarray(values).reshape(shape).astype(np.int16),
+            {"units": "1", "long_name": long_name, "flag_values": flag_values, "flag_meanings": flag_meanings})
+
+
+def _assemble(system: System, config: dict, results: dict) -> xr.Dataset:
+    grid = Grid.from_dict(config["grid"])
+    prob = SystemProblem(system, grid, tol=float(config["tol"]))
+    n = int(np.prod([a[2] for a in config["axes"].values()]))
+    outcome, table, _first = assemble_table(prob, results, np.zeros(n, dtype=np.int64), 1.0)
+    axes = config["axes"]
+    dims = tuple(axes)
+    shape = tuple(int(a[2]) for a in axes.values())
+    labels = prob.labels()
+    data = {
+        "outcome": _outcome(labels, table, outcome, dims, shape,
+                            "attractor id (>= 0, see dimension attractor) or negative label"),
+        "assignment_time": (dims, np.asarray(results["t_assign"]).reshape(shape), {
+            "units": system.time_units,
+            "long_name": "time at which the run was assigned to an attractor or labelled"}),
+        **_table(system, prob, table, outcome),
+    }
+    coords = _coordinates(system, prob, axes, len(table))
     counts = ", ".join(f"{int(np.sum(outcome == v))} {k}" for k, v in labels.items())
     rejection = np.asarray(results["rejection"]).astype(np.int8)
     reasons = SystemProblem.rejection_reasons
@@ -329,7 +367,66 @@ def _assemble(system: System, config: dict, results: dict) -> xr.Dataset:
         "why the last attractor candidate of an undecided run failed its check (0: none)",
         {"none": 0, **{r: i + 1 for i, r in enumerate(reasons)}}))
     attrs = make_attrs("basins", config, status, message, **system.attrs(np.asarray(config["pars"])),
-                       swept=" ".join(dims), undecided=undecided)
+                       swept=" ".join(dims), undecided=undecided, volume_test=config.get("volume_test", ""))
+    return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+def conservative_chunk(system: System, config: dict, start: int, stop: int) -> dict:
+    """Points [start, stop) of a conservative flow's map (module-level: a dask worker runs it)."""
+    prob = SystemProblem(system, Grid.from_dict(config["grid"]), tol=float(config["tol"]))
+    x0 = _initial_states(system, config["state"], config["axes"], start, stop)
+    runs = conservative.sample_runs(prob, RecurrenceSettings(**config["recurrence"]), x0, np.asarray(config["pars"]),
+                                    int(config["batch_size"]))
+    return {"outcome": runs.outcome, "end_time": runs.end_time, "divergence": runs.divergence, "error": runs.error,
+            **{f"level_{k}": runs.level[i] for i, k in enumerate(system.integrals)},
+            **{f"drift_{k}": runs.drift[i] for i, k in enumerate(system.integrals)}}
+
+
+def _assemble_conservative(system: System, config: dict, results: dict) -> xr.Dataset:
+    """No attractors: per start the outcome (bounded, left_grid, ...), the end of its run, its mean divergence and
+    the levels of the first integrals at the start (:mod:`.conservative`); the attractor table is empty."""
+    prob = SystemProblem(system, Grid.from_dict(config["grid"]), tol=float(config["tol"]))
+    axes = config["axes"]
+    dims, shape = tuple(axes), tuple(int(a[2]) for a in axes.values())
+    n = int(np.prod(shape))
+    labels = conservative.conservative_labels(prob)
+    outcome = np.asarray(results["outcome"])
+    rate = system.per_time()
+    data = {
+        "outcome": _outcome(labels, [], outcome, dims, shape,
+                            "how the run ended (a conservative flow has no attractors)"),
+        "assignment_time": (dims, np.asarray(results["end_time"]).reshape(shape), {
+            "units": system.time_units, "long_name": "time at which the run ended (the horizon if bounded)"}),
+        **_table(system, prob, [], outcome),
+    }
+    decided = np.isfinite(np.asarray(results["divergence"]))
+    for name, key, long_name in (("divergence_mean", "divergence", "mean divergence tr(df/dx) over the run's "
+                                  "second half (fill 0: too short)"),
+                                 ("divergence_error", "error",
+                                  "its error: the log volume's range about its chord / the time")):
+        data[name] = (dims, np.where(decided, np.asarray(results[key]), 0.0).reshape(shape),
+                      {"units": rate, "long_name": long_name})
+    data["divergence_decided"] = (dims, decided.astype(np.int8).reshape(shape), flag_attrs(
+        "whether the run was long enough for its mean divergence (two correlation times per block)",
+        {"too_short": 0, "decided": 1}))
+    coords = _coordinates(system, prob, axes, 0)
+    if system.integrals:
+        names = tuple(system.integrals)
+        units = ["1"] * len(names)
+        data["integral_level"] = (dims + ("integral",), np.stack([np.asarray(results[f"level_{k}"]) for k in names],
+                                                                 axis=-1).reshape(*shape, len(names)),
+                                  mixed_units("level of the first integral at the start", "integral"))
+        data["integral_drift"] = (dims + ("integral",), np.stack([np.asarray(results[f"drift_{k}"]) for k in names],
+                                                                 axis=-1).reshape(*shape, len(names)),
+                                  mixed_units("largest |change| of the first integral along the run", "integral"))
+        coords.update(label_coordinates("integral", names, units, "first integral of the system"))
+    counts = ", ".join(f"{int(np.sum(outcome == v))} {k}" for k, v in labels.items())
+    levels = "".join(f"; {k} from {np.min(results[f'level_{k}']):.6g} to {np.max(results[f'level_{k}']):.6g} "
+                     f"(drift <= {np.max(results[f'drift_{k}']):.1g})" for k in system.integrals)
+    message = (f"{system.name}: conservative flow, no attractors ({config['volume_test']}); {n} runs: {counts}"
+               + levels)
+    attrs = make_attrs("basins", config, "conservative", message, **system.attrs(np.asarray(config["pars"])),
+                       swept=" ".join(dims), undecided=0, volume_test=config["volume_test"])
     return xr.Dataset(data, coords=coords, attrs=attrs)
 
 
@@ -339,8 +436,30 @@ def basins(system: System, grid: Grid, axes: dict, *, state=None, pars=None, hor
     """Basins of attraction of ``system``, found by recurrences in ``grid`` (a
     :class:`~tippedisk_analysis.dynamics.attractors.Grid` over states or observables), over one or two initial
     states ``axes`` ({state name: (start, stop, n)}), the other states at ``state`` (default zeros), parameters
-    ``pars`` (default the system's); ``horizon``: the longest run (undecided after it); ``recurrence``: fields of
-    :class:`~tippedisk_analysis.dynamics.attractors.RecurrenceSettings`."""
+    ``pars`` (default the system's).
+
+    What to choose:
+
+    * ``grid``: its coordinates must tell the attractors apart (a forced system: its phase, e.g. both u and w of a
+      phase oscillator, else two responses cross in the projection and share cells), its box must hold them (a run
+      outside it for ``consecutive_lost_steps`` samples is ``left_grid``), and its cells must be finer than the
+      distance between them (two sets closer than ``merge_distance`` = 1.5 cells are one attractor);
+    * ``axes``: the starts (n per axis); they need not lie in the grid;
+    * ``horizon``: the longest run, in the system's time unit: several of its slowest periods or transients
+      (a run not decided by then is ``undecided``, with the reason of its last candidate); the volume test below
+      needs four pairs of correlation times of the divergence in the second half of a run;
+    * ``recurrence``: fields of :class:`~tippedisk_analysis.dynamics.attractors.RecurrenceSettings`: ``dt`` the
+      sampling step (several samples per cell crossed), ``consecutive_recurrences`` and ``attractor_locate_steps``
+      (the window, ``attractor_locate_steps`` dt: what a candidate is judged on);
+    * ``tol``: the Taylor tolerance of the runs.
+
+    Attractors are compared as sets (:mod:`.sets`): closed orbits by their curve and period, irregular sets by
+    their points, equilibria by their point; the dataset stores each attractor's points (``attractor_set``).
+    First a volume test (:mod:`.conservative`) runs a few probes: where the mean divergence tr(df/dx) is zero within
+    its error the flow preserves phase-space volume and has no attractors: the status is ``conservative``, the
+    attractor table is empty and each start gets how its run ended (``bounded``, ``left_grid``, ...), its mean
+    divergence and the levels of the System's first integrals at the start. Otherwise the status is ``completed``
+    (``partial`` where runs failed)."""
     if not 1 <= len(axes) <= 2:
         raise ParameterError("basins need one or two initial-state ranges, e.g. {'u1': (0, 1, 64)}")
     axes = {name: [float(a), float(b), int(n)] for name, (a, b, n) in axes.items()}
@@ -357,6 +476,17 @@ def basins(system: System, grid: Grid, axes: dict, *, state=None, pars=None, hor
     variables = ("att_key", "t_assign", "attractor_distance", *column_names(prob),
                  *(f"final_{n}" for n in system.state_names), "rejection", *set_names(prob))
     n_points = int(np.prod([a[2] for a in axes.values()]))
+    volume = conservative.volume_test(prob, settings, axes, state, np.asarray(config["pars"]), int(batch_size))
+    config["volume_test"] = volume.message
+    if volume.conservative:
+        names = ("outcome", "end_time", "divergence", "error", *(f"{w}_{k}" for w in ("level", "drift")
+                                                                 for k in system.integrals))
+        sweep = sweeps.Sweep(f"runs of {system.name}", config, n_points, int(chunk_size), names,
+                             functools.partial(conservative_chunk, system),
+                             functools.partial(_assemble_conservative, system, config),
+                             functools.partial(_problem(system, grid, float(tol)).integrator, int(batch_size)),
+                             bytes_per_point=8.0 * (len(names) + 4), seconds_per_point=1e-4 * horizon)
+        return sweeps.run_sweep(sweep, output=output, threads=threads, scheduler=scheduler, progress=progress)
     sweep = sweeps.Sweep(f"basins of {system.name}", config, n_points, int(chunk_size), variables,
                          functools.partial(basin_chunk, system), functools.partial(_assemble, system, config),
                          functools.partial(_problem(system, grid, float(tol)).integrator, int(batch_size)),
