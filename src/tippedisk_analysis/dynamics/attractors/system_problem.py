@@ -124,15 +124,7 @@ class SystemProblem(Problem):
             return None
         spread = 0.5 * np.ptp(self.grid.unwrap(observed), axis=1) * self.grid.widths  # the long run's, not the window's
         return dataclasses.replace(desc, centroid=circular_mean(self.grid, observed), spread=spread,
-                                   points=arc_subsample(self.grid, self.observe(dense, pars), self.set_points))
-
-    def _one_period(self, state, period: float, pars) -> np.ndarray:
-        """(n, DENSE_SAMPLES) states of the orbit through ``state`` at equal time steps over one ``period``."""
-        ta = copy.copy(self.system.taylor(self.tol))
-        ta.time, ta.state[:] = 0.0, state
-        if ta.pars.size:
-            ta.pars[:] = np.asarray(pars, dtype=float)[: ta.pars.size]
-        return ta.propagate_grid(np.linspace(0.0, period, DENSE_SAMPLES, endpoint=False))[-1].T
+                                   points=subsample(observed, self.set_points))
 
     def _with_neighbourhood(self, desc: Description, observed) -> Description:
         """An equilibrium with the cells of the samples ``observed`` (D, L) within NEIGHBOURHOOD cells of it as
