@@ -119,3 +119,33 @@ def test_the_disk_entered_rolling_on_the_cone_starts_sliding_at_once():
     for seg in run.segments:
         if seg.mode == "rolling":
             assert system.modes["rolling"].observe(seg.states.T, pars)["cone_margin"].min() > -1e-12
+
+
+def thermostat(filippov: bool) -> dy.HybridSystem:
+    """T' = -k (T - T_out) + P u, the heater on (u = 1) below T_set: two modes switching at T = T_set (a relay
+    without hysteresis), or the Filippov system of the same two fields (its sliding mode holds T = T_set)."""
+    T = hy.make_vars("T")
+    k, t_out, power, t_set = (hy.par[i] for i in range(4))
+    pars = {"k": 0.1, "T_out": 5.0, "P": 3.0, "T_set": 20.0}
+    on = dy.System("on", [T], [-k * (T - t_out) + power], pars, strict_parameters=False)
+    off = dy.System("off", [T], [-k * (T - t_out)], pars, strict_parameters=False)
+    if filippov:
+        return dy.filippov_system("thermostat", on, off, T - t_set)
+    return dy.HybridSystem("thermostat", {"on": on, "off": off},
+                           [dy.Guard("warm", "on", T - t_set, dy.Jump("off"), direction="positive"),
+                            dy.Guard("cold", "off", T - t_set, dy.Jump("on"), direction="negative")])
+
+
+def test_a_thermostat_without_a_sliding_mode_chatters_and_says_so():
+    """Heated from 10 to 20 (T = 35 - 25 exp(-t / 10): at t = 10 ln(5/3)), the switched-off room cools below
+    T_set at once, the heater starts at once: the switches accumulate there (zeno, never a room cooling to T_out
+    unseen). The Filippov system of the same fields slides on T = T_set to the end."""
+    t_reach = 10 * math.log(25 / 15)
+    run = dy.simulate_hybrid(thermostat(False), "on", np.array([10.0]), 100.0, grid=np.linspace(0, 100, 101))
+    assert run.status == "zeno" and "filippov_system" in run.message
+    assert run.accumulation == pytest.approx(t_reach, abs=1e-12) and run.t_final == pytest.approx(t_reach, abs=1e-12)
+    assert np.vstack([s.states for s in run.segments])[:, 0].max() < 20.0 + 1e-12
+    sliding = dy.simulate_hybrid(thermostat(True), "minus", np.array([10.0]), 100.0, grid=np.linspace(0, 100, 101))
+    assert sliding.status == "completed" and [s.target for s in sliding.switches] == ["sliding"]
+    assert sliding.switches[0].time == pytest.approx(t_reach, abs=1e-12)
+    assert abs(sliding.segments[-1].states[-1, 0] - 20.0) < 1e-12

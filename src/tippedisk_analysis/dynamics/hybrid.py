@@ -357,7 +357,8 @@ def _zeno_message(found: tuple, t: float, guard: str) -> str:
     t_z, per_cycle, ratio = found
     if ratio == 0.0:
         return (f"switches accumulate at t = {t_z:.10g}: the last of them fall within round-off of that instant "
-                f"(guard {guard!r}; the motion stays on it: declare a mode that holds it, e.g. sticking or sliding)")
+                f"(guard {guard!r}; the motion stays on it: declare a mode that holds it, sticking or sliding, as "
+                "dy.filippov_system does)")
     cycle = "switch" if per_cycle == 1 else f"{per_cycle} switches"
     return (f"switches accumulate at t = {t_z:.10g} (intervals shrink by {ratio:.6g} per {cycle}); the run stops at "
             f"the last switch, t = {t:.10g}, before it (continue past it with a mode that holds the motion there)")
