@@ -149,3 +149,17 @@ def test_a_thermostat_without_a_sliding_mode_chatters_and_says_so():
     assert sliding.status == "completed" and [s.target for s in sliding.switches] == ["sliding"]
     assert sliding.switches[0].time == pytest.approx(t_reach, abs=1e-12)
     assert abs(sliding.segments[-1].states[-1, 0] - 20.0) < 1e-12
+
+
+def test_a_guard_resting_on_its_zero_neither_fires_nor_hides_another():
+    """x stays 0 (its guard rests on its zero) while y = exp(-t) falls through 1/2 at t = ln 2."""
+    x, y = hy.make_vars("x", "y")
+    decay = dy.System("decay", [x, y], [0.0 * x, -y])
+    system = dy.HybridSystem("rest", {"a": decay, "b": decay},
+                             [dy.Guard("rest", "a", x, dy.Jump("b"), direction="any"),
+                              dy.Guard("half", "a", y - 0.5, dy.Jump("b"), direction="negative")])
+    run = dy.simulate_hybrid(system, "a", np.array([0.0, 1.0]), 2.0, grid=np.linspace(0.0, 2.0, 21))
+    assert run.status == "completed" and [(s.guard, s.target) for s in run.switches] == [("half", "b")]
+    assert run.switches[0].time == pytest.approx(math.log(2.0), abs=1e-14)
+    t, states = samples(run)
+    assert np.abs(states[:, 1] - np.exp(-t)).max() < 1e-14 and np.all(np.diff(t) >= 0)

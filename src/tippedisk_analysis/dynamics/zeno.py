@@ -48,6 +48,7 @@ class Departure:
     samples: list = field(default_factory=list)  # [(t, x)] at output times inside the stretch
     fired: int | None = None
     status: str = "ok"
+    rests: bool = False  # a guard stayed on its zero for the whole step
 
 
 class Departures:
@@ -78,6 +79,18 @@ class Departures:
         return self.hybrid.modes[mode].evaluate(function, states, self.pars)
 
     def depart(self, mode: str, t0: float, x0: np.ndarray, t_end: float, grid) -> Departure:
+        """Where to start ``mode`` entered at (t0, x0): past every guard's zero, step after step while a guard
+        rests on it."""
+        samples = []
+        while True:
+            dep = self._depart_step(mode, t0, x0, t_end, grid)
+            samples += dep.samples
+            if not dep.rests or dep.time <= t0 or dep.time >= t_end:
+                dep.samples = samples
+                return dep
+            t0, x0 = dep.time, dep.state
+
+    def _depart_step(self, mode: str, t0: float, x0: np.ndarray, t_end: float, grid) -> Departure:
         ta, _f = self._for(mode)
         ta.time, ta.state[:] = t0, x0
         _outcome, h = ta.step(max_delta_t=max(t_end - t0, 0.0), write_tc=True)
@@ -122,7 +135,7 @@ class Departures:
         if grid is not None:
             inside = grid[(grid > t0) & (grid <= t_clear)]
             samples = list(zip(inside, polynomial(tc, inside - t0).T))
-        return Departure(t_clear, X[:, clear].copy(), samples)
+        return Departure(t_clear, X[:, clear].copy(), samples, rests=clear == len(taus) - 1)
 
     def _root(self, mode: str, i: int, tc: np.ndarray, a: float, b: float) -> float:
         """tau in [a, b] where event i changes sign (bisection on the step's polynomials)."""
