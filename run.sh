@@ -9,13 +9,18 @@ set -euo pipefail
 cd "$(dirname "$0")"
 PYTHON=${PYTHON:-python3}
 if [ ! -x .venv/bin/python ]; then
+    echo "run.sh: creating the virtual environment .venv ($PYTHON -m venv)"
     "$PYTHON" -m venv .venv
 fi
 # reinstall only when pyproject.toml changed (the install is editable: source changes need none)
 stamp=".venv/.installed-$(sha256sum pyproject.toml | cut -c1-16)"
 if [ ! -e "$stamp" ]; then
-    .venv/bin/python -m pip install --quiet --disable-pip-version-check -e ".[test,docs]"
+    echo "run.sh: installing the package with its test and documentation tools into .venv (1-2 min the first time)"
+    # pip's own lines, one per package it fetches or installs; its errors go to stderr unfiltered
+    .venv/bin/python -m pip install --disable-pip-version-check --progress-bar off -e ".[test,docs]" \
+        | { grep --line-buffered -E "^(Collecting|Building|Installing collected|Successfully installed)" || true; }
     rm -f .venv/.installed-* && touch "$stamp"
+    echo "run.sh: .venv ready; 'source .venv/bin/activate' puts tippedisk on PATH"
 fi
 # the CF checker of the slow tests (tests/test_cf.py): cfchecker in its own venv (it pins its own numpy),
 # UDUNITS-2 from Debian
