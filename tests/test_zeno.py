@@ -163,3 +163,18 @@ def test_a_guard_resting_on_its_zero_neither_fires_nor_hides_another():
     assert run.switches[0].time == pytest.approx(math.log(2.0), abs=1e-14)
     t, states = samples(run)
     assert np.abs(states[:, 1] - np.exp(-t)).max() < 1e-14 and np.all(np.diff(t) >= 0)
+
+
+def test_a_large_unrelated_state_leaves_the_guard_resolution_alone():
+    """The ball carried along x' = 1 from x = 1e8: the floor's round-off is that of z, not of x, so the run
+    resolves the same 42 impacts and the same accumulation time."""
+    z, v, x = hy.make_vars("z", "v", "x")
+    g, e = hy.par[0], hy.par[1]
+    flight = dy.System("flight", [z, v, x], [v, -g + 0.0 * z, 1.0 + 0.0 * x], {"g": G, "e": 0.8},
+                       strict_parameters=False)
+    carried = dy.HybridSystem("carried", {"flight": flight},
+                              [dy.Guard("impact", "flight", z, dy.Jump("flight", {"v": -e * v}))])
+    run = dy.simulate_hybrid(carried, "flight", np.array([1.0, 0.0, 1e8]), 20.0)
+    t_z = math.sqrt(2 / G) * (1 + 2 * 0.8 / 0.2)
+    assert run.status == "zeno" and len(run.switches) == 42 and abs(run.accumulation - t_z) < 1e-6 * t_z
+    assert np.abs([s.time for s in run.switches][:20] - impact_times(1.0, 0.8, 20)).max() < 1e-10

@@ -28,7 +28,7 @@ import numpy as np
 from ..errors import ParameterError
 from .poincare import Recorder
 from .system import DIRECTIONS, Event, System
-from .zeno import ROUND_OFF, ZENO_TAIL, Departures, accumulation
+from .zeno import ZENO_TAIL, Departures, accumulation
 
 MAX_SWITCHES = 10_000
 
@@ -145,18 +145,6 @@ class HybridSystem:
             if out[0] >= 0.0:
                 return k, j.target, np.array(out[1:])
         return -1, mode, np.asarray(state, dtype=float)
-
-    def guards_at_zero(self, mode: str, state, pars) -> set:
-        """Names of the guards of ``mode`` that are zero to round-off at ``state`` (e.g. the surface a sliding
-        motion has just left)."""
-        guards = self.mode_guards(mode)
-        if not guards:
-            return set()
-        x = np.asarray(state, dtype=float)
-        values = self.modes[mode].evaluate(self.modes[mode].function(
-            "guards", [g.expression for g in guards], "the guards"), x, pars)
-        size = max(1.0, float(np.max(np.abs(x)))) if x.size else 1.0
-        return {g.name for g, value in zip(guards, values) if abs(value) <= ROUND_OFF * size}
 
     def guard(self, mode: str, name: str) -> Guard:
         for g in self.mode_guards(mode):

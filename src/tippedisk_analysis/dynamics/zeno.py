@@ -3,11 +3,11 @@
 
 Departure. Where a mode is entered on a guard's zero (a reset onto its own guard, as a bounce; the surface a
 sliding motion has just left), heyoka would find that zero again at once. The run first takes the stretch
-over which the guard leaves the band |g| < BAND eps_g about zero (eps_g = ROUND_OFF times the state's size).
-The stretch is read off the Taylor polynomials of one step, x(t0 + tau) = sum_k c_k tau^k (exact for a
-polynomial flow), with every terminal event evaluated on a geometric grid of tau: its length follows the
-guard's own rate, BAND eps_g / |dg/dt|, or (BAND eps_g / |g^(k)| k!)^(1/k) where the first k - 1 derivatives
-vanish (a sliding exit). Nothing in it goes unseen: a guard that leaves into the side it fires on (g falling
+over which the guard leaves the band |g| < BAND eps_g about zero (eps_g = ROUND_OFF times the size of the
+states it reads). The stretch is read off the Taylor polynomials of one step, x(t0 + tau) = sum_k c_k tau^k
+(exact for a polynomial flow), with every terminal event evaluated on a geometric grid of tau: its length
+follows the guard's own rate, BAND eps_g / |dg/dt|, or (BAND eps_g k! / |g^(k)|)^(1/k) where the first k - 1
+derivatives vanish (a sliding exit). Nothing in it goes unseen: a guard that leaves into the side it fires on (g falling
 for a ``negative`` guard) fires at once; any other event whose sign turns in it fires at its root there; a
 guard that stays in the band for the whole step rests on its zero for that step.
 
@@ -24,9 +24,10 @@ import copy
 import math
 from dataclasses import dataclass, field
 
+import heyoka as hy
 import numpy as np
 
-ROUND_OFF = 1e-13  # a guard within this (relative to the state's size) of zero is at zero
+ROUND_OFF = 1e-13  # a guard within this (relative to the size of the states it reads) of zero is at zero
 BAND = 10.0  # a guard has left its zero once |g| >= BAND * its round-off (heyoka's cooldown uses the same factor)
 OCTAVES, PER_OCTAVE, UNIFORM = 70, 8, 64  # the tau grid: geometric down to 2^-70 of the step, and uniform
 ZENO_INTERVALS = 8  # consecutive geometric intervals before an accumulation is believed
@@ -57,7 +58,7 @@ class Departures:
 
     def __init__(self, hybrid, tol: float, pars: np.ndarray):
         self.hybrid, self.pars = hybrid, pars
-        self._probe, self._events = {}, {}
+        self._probe, self._events, self._reads = {}, {}, {}
         self.tol = tol
 
     def _for(self, mode: str):
@@ -69,7 +70,16 @@ class Departures:
             self._events[mode] = self.hybrid.modes[mode].function(
                 "terminal events", [e.expression for e in system.events], "the terminal events") if system.events \
                 else None
+            names = [str(v) for v in system.variables]
+            self._reads[mode] = [[names.index(v) for v in hy.get_variables(e.expression)] for e in system.events]
         return self._probe[mode], self._events[mode]
+
+    def bands(self, mode: str, x: np.ndarray) -> np.ndarray:
+        """Each terminal event's round-off at state x: ROUND_OFF times the size (at least 1) of the states it
+        reads (an unrelated large state, a position or an angle run up, leaves it alone)."""
+        self._for(mode)
+        return np.array([ROUND_OFF * max(1.0, float(np.max(np.abs(x[idx])))) if idx else ROUND_OFF
+                         for idx in self._reads[mode]])
 
     def values(self, mode: str, states) -> np.ndarray:
         """The mode's terminal events (its own, then its guards) at states (n,) or (n, N)."""
@@ -102,10 +112,9 @@ class Departures:
             return Departure(t0, x0, status="nonfinite")
         events = self.hybrid.system(mode).events
         n_own = len(self.hybrid.modes[mode].events)
-        size = max(1.0, float(np.max(np.abs(x0)))) if x0.size else 1.0
-        band = ROUND_OFF * size
+        band = self.bands(mode, x0)
         v0 = ends[:, 0]
-        at_zero = [i for i in range(n_own, len(events)) if abs(v0[i]) <= band]
+        at_zero = [i for i in range(n_own, len(events)) if abs(v0[i]) <= band[i]]
         if not at_zero:
             return Departure(t0, x0)
         step = abs(h)
@@ -115,7 +124,7 @@ class Departures:
         V = self.values(mode, X)
         start, fire = {}, None  # start: where each guard at zero has left its band (the stretch before is in it)
         for i in at_zero:
-            out = np.flatnonzero(np.abs(V[i]) >= BAND * band)
+            out = np.flatnonzero(np.abs(V[i]) >= BAND * band[i])
             start[i] = int(out[0]) if out.size else len(taus) - 1  # none: it rests on its zero for the whole step
             if out.size and fires_on(events[i].direction, V[i, start[i]]):
                 fire = (0, i) if fire is None else min(fire, (0, i))
