@@ -4,10 +4,12 @@
 #   bash run.sh test       the test suite a developer runs in the loop (long checks marked slow left out)
 #   bash run.sh test-all   every test, slow checks included (what CI runs)
 #   bash run.sh docs       the documentation site, warnings as errors -> docs/_build/html/index.html
-# Extra arguments after test / test-all go to pytest.
+# Extra arguments after test / test-all go to pytest. The tests run in parallel (pytest-xdist), one worker per
+# core, a test module's tests on one worker (its fixtures computed once); TEST_WORKERS=0 runs them in this process.
 set -euo pipefail
 cd "$(dirname "$0")"
 PYTHON=${PYTHON:-python3}
+WORKERS=${TEST_WORKERS:-auto}
 if [ ! -x .venv/bin/python ]; then
     echo "run.sh: creating the virtual environment .venv ($PYTHON -m venv)"
     "$PYTHON" -m venv .venv
@@ -35,8 +37,8 @@ cf_checker() {
 }
 case "${1:-demo}" in
     demo) .venv/bin/tippedisk study fig13_ode_inversion --output-dir output ;;
-    test) shift; .venv/bin/python -m pytest "$@" ;;
-    test-all) shift; cf_checker; .venv/bin/python -m pytest --slow "$@" ;;
+    test) shift; .venv/bin/python -m pytest -n "$WORKERS" --dist loadscope "$@" ;;
+    test-all) shift; cf_checker; .venv/bin/python -m pytest -n "$WORKERS" --dist loadscope --slow "$@" ;;
     docs) .venv/bin/python -m sphinx -W --keep-going -q -b html docs docs/_build/html
           echo "site: docs/_build/html/index.html" ;;
     *) echo "usage: bash run.sh [demo|test|test-all [pytest args]|docs]" >&2; exit 2 ;;

@@ -49,6 +49,7 @@ def test_small_nutations_drift_at_the_closed_form_rate_and_the_spin_only_at_seco
     assert double["spin_rate"] / small["spin_rate"] == pytest.approx(4.0, rel=2e-2)  # G = O(a^2): spins rest
 
 
+@pytest.mark.slow
 def test_the_averaged_path_follows_the_slow_flow_started_on_the_family():
     """From the member a = 1.2 rad, Omega0 = 32 rad/s: runs of the free slow flow at eps 0.004 and 0.002 m/s
     pass their turning points where (N1) puts them at the same slow time, with errors of first order in eps
@@ -72,6 +73,7 @@ def test_the_averaged_path_follows_the_slow_flow_started_on_the_family():
         assert 0.3 < second / first < 0.7
 
 
+@pytest.mark.slow
 def test_members_come_from_the_first_branch_and_none_past_its_fold():
     """At 32.2 rad/s the family's first branch folds at a = 2.1053 rad (traced at 32.25 rad/s); at a = 2.2 rad
     another branch has members (beta_dot 2.24 and 2.95 rad/s), which a guess alone could land on. Members are

@@ -73,6 +73,7 @@ def test_small_nutations_drift_at_the_closed_form_rate(spin):
     assert intercept == pytest.approx(cs.rates(spin)["rate_nutation"], rel=2e-3)
 
 
+@pytest.mark.slow
 def test_the_hopf_point_is_supercritical_and_a_fold_of_cycles_follows_it_closely():
     """Below omega_c the nutation grows at every amplitude (30.0 rad/s) until, 0.004 rad/s below omega_c, an
     attracting and a repelling cycle appear together; the attracting one shrinks into the spin at omega_c, the
@@ -199,6 +200,7 @@ def test_the_averaged_drift_follows_the_held_model(drift_30_5):
         assert np.abs(measured - expected).max() < 0.01
 
 
+@pytest.mark.slow
 def test_a_disk_it_was_not_built_on_has_a_repelling_cycle_above_its_own_omega_c():
     """The drilled disk with e = 3.5 mm: no cycle 0.2 rad/s below its own omega_c, one 0.3 rad/s above it, and
     that one is the held model's periodic orbit at eps = 0.005 m/s."""
