@@ -343,7 +343,7 @@ def test_cli_method_options_reach_the_branch_and_misplaced_ones_are_one_line(tmp
                  "--ntst", "30", "--ncol", "5", "-o", str(out)]) == 0
     ds = td.load(out)
     assert ds.attrs["method"] == "collocation" and int(ds.ntst[0]) == 30
-    assert td.results.config_of(ds)["ncol"] == 5 and ds.attrs["labels"] == "HC1"
+    assert td.results.config_of(ds)["ncol"] == 5 and ds.attrs["labels"] == "PB1"  # T = 10 comes before the fold
     capsys.readouterr()
     for argv, fragment in ((["--method", "collocation", "--segments", "4"], "--segments and --phase poincare"),
                            (["--method", "shooting", "--ntst", "30"], "--ntst and --ncol are collocation options"),

@@ -31,7 +31,8 @@ def nearest_pair(ev: np.ndarray) -> complex:
 
 LABELS = {"fold": "LP", "branch_point": "BP", "hopf": "HOPF", "bogdanov_takens": "BT", "zero_hopf": "ZH",
           "double_hopf": "HH", "bautin": "GH", "cusp": "CP", "line_saddle_change": "LS",
-          "line_focus_node": "LF", "period_doubling": "PD", "neimark_sacker": "NS", "homoclinic": "HC", "user": "UZ"}
+          "line_focus_node": "LF", "period_doubling": "PD", "neimark_sacker": "NS", "homoclinic": "HC", "user": "UZ",
+          "heteroclinic": "HET", "snic": "SNIC", "period_bound": "PB"}
 
 
 def label_points(special: list) -> None:

@@ -31,7 +31,7 @@ import numpy as np
 import xarray as xr
 
 from ..errors import ParameterError
-from . import continuation, normal_forms
+from . import continuation, normal_forms, period_limits
 from .branches import bounds_pair
 from .datasets import point_of, special_point
 from .flows import TAYLOR_TOL
@@ -98,29 +98,31 @@ def continue_orbits(orbit: PeriodicOrbit, parameter: str, *, bounds=None, direct
         br = continuation.continue_both_ways(prob, u0, options, marks=marks)
     else:
         br = continuation.continue_branch(prob, u0, options, direction=direction, marks=marks)
-    _mark_homoclinic(prob, br)
+    _mark_period_limit(prob, br)
     return br, prob
 
 
-def _mark_homoclinic(prob: OrbitProblem, br: continuation.Branch) -> None:
-    """If the branch ended at the period bound with the period growing and the parameter converging, add a
-    special point ``homoclinic`` at the last point with the limit p_hc of p - p_hc ~ A exp(-lam T)."""
+def _mark_period_limit(prob: OrbitProblem, br: continuation.Branch) -> None:
+    """If the branch ended at the period bound, add a special point at its last point that names the
+    infinite-period limit (:func:`.period_limits.classify_end`): ``homoclinic``, ``heteroclinic``, ``snic`` with
+    the limit p_c and its uncertainty, or ``period_bound`` (not named, with the reason), and say so in the
+    branch's message."""
     if prob.t_index not in prob.bounds or not br.points:
         return
     T_max = prob.bounds[prob.t_index][1]
     last = br.points[-1]
     if last.special != "bound" or abs(last.u[prob.t_index] - T_max) > 1e-9 * T_max:
         return
-    T = np.array([p.u[prob.t_index] for p in br.points])
-    P = np.array([p.u[prob.t_index + 1] for p in br.points])
-    limit, rate = homoclinic_limit(T, P)
-    data = {"period": float(T[-1]), "limit": limit, "rate": rate, "last_periods": T[-5:].tolist(),
-            "last_values": P[-5:].tolist()}
-    br.special_points.append(continuation.SpecialPoint("homoclinic", len(br.points) - 1, last.u, last.eigenvalues,
-                                                       float(P[-1] - limit), data))
+    end = period_limits.classify_end(prob, br)
+    T_first, T_last, p = prob.split(br.points[0].u)[1], prob.split(last.u)[1], prob.parameter
+    data = {"period": T_last, **{k: end[k] for k in ("limit", "error", "rate", "law", "reason")},
+            "last_periods": end["periods"][-5:].tolist(), "last_values": end["values"][-5:].tolist(),
+            "equilibria": [e.state.tolist() for e in end["equilibria"]],
+            "fold": None if end["fold"] is None else end["fold"]["value"]}
+    br.special_points.append(continuation.SpecialPoint(end["kind"], len(br.points) - 1, last.u, last.eigenvalues,
+                                                       float(prob.split(last.u)[2] - end["limit"]), data))
     continuation.label_points(br.special_points)
-    br.message += (f"; the period grew to {T[-1]:.6g} (from {T[0]:.6g}) while {prob.parameter} converged: approach "
-                   f"to a homoclinic orbit at {prob.parameter} ~ {limit:.8g} (p - p_hc ~ exp(-{rate:.4g} T))")
+    br.message += f"; the period grew to {T_last:.6g} (from {T_first:.6g}): " + period_limits.describe(end, p)
 
 
 def homoclinic_limit(T: np.ndarray, P: np.ndarray) -> tuple[float, float]:
@@ -179,7 +181,7 @@ def switch_period_doubling(prob: OrbitProblem, br: continuation.Branch, label: s
         gap = np.max(np.abs(Xs[0] - Xs[half]) / np.asarray(prob.system.state_scale))
         if gap > 1e-3 * h:
             branch = continuation.continue_branch(double, start, options, tangent=sign * d)
-            _mark_homoclinic(double, branch)
+            _mark_period_limit(double, branch)
             return branch, double
     raise ParameterError(f"no orbit of twice the period found next to {label} (the corrector fell back onto the "
                          "old orbit); try a larger h")
@@ -299,7 +301,7 @@ def hopf_branch(system: System, state, pars, parameter: str, *, bounds, method: 
                                   period_max=period_max, parameter_scale=parameter_scale, options=options,
                                   **discretisation)
     br = continuation.continue_branch(prob, u, options, tangent=tangent, marks=marks)
-    _mark_homoclinic(prob, br)
+    _mark_period_limit(prob, br)
     values = np.array([prob.split(p.u)[2] for p in br.points])
     hopf_value = pars[system.parameter_index(parameter)]
     if br.status in ("stalled", "corrector_failed") or np.ptp(values) <= VERTICAL_SPAN * (1 + abs(hopf_value)):

@@ -4,6 +4,7 @@ and an orbit read back from one (continued later by passing the same ``System``)
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 import xarray as xr
@@ -16,10 +17,11 @@ from .datasets import (check_system, flag_attrs, label_coordinates, mixed_units,
 from .flows import STABILITY
 from .orbits import NEWTON_MAX_ITER, STATUS, find_orbit
 from .orbit_base import N_SAMPLES, TRIVIAL_TOL, OrbitProblem, PeriodicOrbit
+from .period_limits import KINDS as PERIOD_LIMITS
 from .system import System
 
 SPECIAL_KINDS = {"bound": 0, "fold": 1, "branch_point": 2, "period_doubling": 3, "neimark_sacker": 4,
-                 "homoclinic": 5, "hopf": 6, "user": 7}
+                 "homoclinic": 5, "hopf": 6, "user": 7, "heteroclinic": 8, "snic": 9, "period_bound": 10}
 """int8 codes of ``special_kind`` in periodic-orbit datasets."""
 MULTIPLIER_SOURCES = {"collocation": 0, "shooting": 1}
 """int8 codes of ``multiplier_source`` in collocation datasets."""
@@ -44,6 +46,12 @@ def branch_dataset(prob: OrbitProblem, br: continuation.Branch, info: dict | Non
     ds = orbits_dataset(orbits, status, message, config, special=br.special_points, prob=prob,
                         arclength=br.array("arclength"), extra=extra(orbits) if extra else None)
     ds.attrs.update(unlocated_attrs(br))
+    ends = [sp for sp in br.special_points if sp.kind in PERIOD_LIMITS]
+    if ends:
+        data = ends[-1].data
+        ds.attrs.update(period_limit=ends[-1].kind, period_limit_reason=data["reason"])
+        if math.isfinite(data["limit"]):
+            ds.attrs.update(period_limit_value=data["limit"], period_limit_error=data["error"])
     return ds
 
 
@@ -189,19 +197,26 @@ def _special_table(special: list, system: System, parameter: str | None) -> dict
                          flag_attrs("type of the special point", SPECIAL_KINDS)),
         "special_label": ("special_point", np.array([sp.label for sp in special], dtype=str),
                           {"long_name": "label: LP fold of cycles, BP branch point, PD period doubling, NS "
-                                        "Neimark-Sacker, HC approach to a homoclinic orbit"}),
+                                        "Neimark-Sacker; at the period bound HC approach to a homoclinic orbit, "
+                                        "HET to a heteroclinic cycle, SNIC to a saddle-node on the invariant cycle, "
+                                        "PB no limit named"}),
         "special_index": ("special_point", np.array([sp.index for sp in special], np.int32),
                           {"units": "1", "long_name": "index along dim point"}),
         "special_value": ("special_point", np.array([sp.value if np.isfinite(sp.value) else 0.0 for sp in special]),
-                          {"long_name": "located test function (|mu| - 1 of the critical multiplier; HC: p - p_hc)"}),
+                          {"long_name": "located test function (|mu| - 1 of the critical multiplier; HC, HET, SNIC: "
+                                        "p - p_c)"}),
         "special_multiplier_real": ("special_point", get("multiplier_real"),
                                     {"units": "1", "long_name": "critical multiplier, real part"}),
         "special_multiplier_imag": ("special_point", get("multiplier_imag"),
                                     {"units": "1", "long_name": "critical multiplier, imaginary part"}),
         "special_angle": ("special_point", get("angle"), {"units": "rad", "long_name": "NS: rotation angle arg mu"}),
-        "special_limit": ("special_point", get("limit"), {"units": system.units_of(parameter) if parameter else "1",
-                                                           "long_name": "HC: extrapolated parameter of the homoclinic "
-                                                                        "orbit"}),
+        "special_limit": ("special_point", get("limit"),
+                          {"units": system.units_of(parameter) if parameter else "1",
+                           "long_name": "HC, HET, SNIC: the limit p_c of the infinite period fitted to the last "
+                                        "orbits (0 elsewhere)"}),
+        "special_limit_error": ("special_point", get("error"),
+                                {"units": system.units_of(parameter) if parameter else "1",
+                                 "long_name": "HC, HET, SNIC: uncertainty of special_limit (0 elsewhere)"}),
     }
 
 
