@@ -10,8 +10,9 @@ against parameter p) checks it and gives p_c:
 * **heteroclinic** cycle (HET): two or more saddles near the orbit; the same law with 1/lam = sum_i 1/lam_i
   (one passage per saddle, lam_i one of saddle i's leading rates);
 * saddle-node on the invariant cycle (**SNIC**): no equilibrium near the orbit, but a fold of equilibria
-  (a zero eigenvalue) at p_fold near its slowest point; T = C |p - p_c|^(-1/2) (1 + O(p - p_c)), fitted as
-  p = p_c + c1 s + c2 s^2 with s = T^-2, and p_c must agree with p_fold;
+  (a zero eigenvalue) at p_fold near its slowest point; T = C |p - p_c|^(-1/2) + T_0 + ..., fitted as
+  p = p_c + c2 u^2 + c3 u^3 + c4 u^4 with u = 1/T (c3: the time T_0 away from the bottleneck), and p_c must
+  agree with p_fold;
 * otherwise ``period_bound`` (PB): the limit is not named (no equilibrium or fold near the orbit, a node or
   focus there, or the law does not fit), and no p_c is given.
 
@@ -317,11 +318,12 @@ def _log_fit(T, P, rate=None) -> tuple[float, float, float, float]:
     return float(coef[0]), float(math.sqrt(max(cov[0, 0], 0.0))), float(rate), rms
 
 
-def _power_fit(T, P, order: int = 2) -> tuple[float, float, float, float]:
-    """(p_c, its standard error, C, rms relative residual) of p = p_c + sum_k c_k s^k (k = 1 .. order),
-    s = (T_last / T)^2; C = T_last sqrt|c_1| of T ~ C |p - p_c|^(-1/2)."""
-    s = (T[-1] / T) ** 2
-    coef, cov, rms = _weighted_fit(np.column_stack([s ** k for k in range(order + 1)]), P)
+def _power_fit(T, P, order: int = 3) -> tuple[float, float, float, float]:
+    """(p_c, its standard error, C, rms relative residual) of p = p_c + sum_k c_k u^k (k = 2 .. order),
+    u = T_last / T (u^3: the time spent away from the bottleneck); C = T_last sqrt|c_2| of
+    T ~ C |p - p_c|^(-1/2)."""
+    u = T[-1] / T
+    coef, cov, rms = _weighted_fit(np.column_stack([u ** k for k in (0, *range(2, order + 1))]), P)
     return float(coef[0]), float(math.sqrt(max(cov[0, 0], 0.0))), float(T[-1] * math.sqrt(abs(coef[1]))), rms
 
 
@@ -357,14 +359,14 @@ def fit_log_law(T, P, rates=()) -> dict:
 
 
 def fit_power_law(T, P) -> dict:
-    """p = p_c + c1 s + c2 s^2 + c3 s^3, s = (T_last / T)^2, through the window (T, p) (module docstring),
-    checked against the quadratic in s: {"limit", "error", "rate" C of T ~ C |p - p_c|^(-1/2), "residual",
-    "fits", "reason"}."""
-    return _law(_power_fit3, [_power_fit], np.asarray(T, float), np.asarray(P, float), 4)
+    """p = p_c + c2 u^2 + c3 u^3 + c4 u^4, u = T_last / T, through the window (T, p) (module docstring), checked
+    against the cubic in u: {"limit", "error", "rate" C of T ~ C |p - p_c|^(-1/2), "residual", "fits",
+    "reason"}."""
+    return _law(_power_fit4, [_power_fit], np.asarray(T, float), np.asarray(P, float), 4)
 
 
-def _power_fit3(T, P):
-    return _power_fit(T, P, 3)
+def _power_fit4(T, P):
+    return _power_fit(T, P, 4)
 
 
 def describe(end: dict, parameter: str) -> str:
