@@ -89,7 +89,13 @@ def continue_orbits(orbit: PeriodicOrbit, parameter: str, *, bounds=None, direct
     pair for ``parameter``, or {name or "T": (low, high)}), with its special points
     (fold of cycles, branch point, period doubling, Neimark-Sacker, approach to a homoclinic orbit at the
     period bound ``period_max``; user points at ``marks``); ``problem_options``: those of :func:`orbit_problem`
-    (method, ntst, ncol, segments, ...). Returns (Branch, problem)."""
+    (method, ntst, ncol, segments, ...).
+
+    Returns ``(branch, problem)``: ``branch`` is the continuation core's :class:`.continuation.Branch` (its
+    ``points`` each hold the unknowns ``u`` of the problem's discretisation, the arclength and the Floquet
+    multipliers as ``eigenvalues``; ``special_points``, ``status`` and ``message``), ``problem`` the
+    :class:`.orbit_base.OrbitProblem` that reads them (``problem.orbit(u)`` is one :class:`PeriodicOrbit`). ``dy.branch_dataset(problem, branch)`` makes the dataset of kind
+    ``periodic_orbits`` that :func:`orbit_branch` returns, with periods, states, multipliers and special points."""
     if bounds is not None and not isinstance(bounds, dict):
         bounds = {parameter: bounds_pair(bounds, parameter)}
     prob, u0 = orbit_problem(orbit, parameter, bounds=bounds, **problem_options)
