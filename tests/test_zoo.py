@@ -241,6 +241,17 @@ def test_chen_chaos_is_irregular_with_a_positive_exponent():
     assert exponents.sum() == pytest.approx(-10.0, abs=0.02)
 
 
+def test_thomas_weak_chaos_sums_to_its_divergence_and_a_short_run_says_it_has_not_converged():
+    """Thomas' system: the divergence is -3b everywhere, so the spectrum's sum is -3b along any run; its largest
+    exponent (about 0.005) is too small to settle in 3000 time units, and the run says so instead of `completed`."""
+    b = 0.208186
+    ly = dy.lyapunov_spectrum(zoo.thomas(b), [0.1, 0.0, -0.1], t_end=3000.0, dt=1.0, transient=200.0)
+    assert float(ly.divergence_mean) == pytest.approx(-3 * b, rel=1e-12)
+    assert ly.exponents.values.sum() == pytest.approx(-3 * b, rel=1e-9)
+    assert ly.attrs["status"] == "not_converged" and "t_end" in ly.attrs["message"]
+    assert np.all(ly.exponent_error.values > 0)
+
+
 # ------------------------------------------------------------------------- continuation and orbits
 def test_conservative_hopf_point_is_degenerate_and_its_family_vertical():
     """Duffing-van der Pol at mu = 0 is conservative: its Hopf point has l1 = 0 (flagged degenerate), and the

@@ -107,6 +107,13 @@ def roessler(c: float = 4.0) -> dy.System:
     return dy.System("roessler_user", [x, y, z], [-y - z, x + 0.2 * y, 0.2 + z * (x - p0)], parameters={"c": c})
 
 
+def thomas(b: float = 0.208186) -> dy.System:
+    """Thomas' cyclically symmetric system x' = sin y - b x (and cyclic): weak chaos at b = 0.208186 (largest
+    exponent about 0.005, from a scipy DOP853 QR run over 8000 time units: 0.0048-0.0062); divergence -3b exactly."""
+    return dy.System("thomas_user", [x, y, z], [hy.sin(y) - p0 * x, hy.sin(z) - p0 * y, hy.sin(x) - p0 * z],
+                     parameters={"b": b})
+
+
 def selkov(b: float = 0.6) -> dy.System:
     """Sel'kov's glycolysis model x' = -x + a y + x^2 y, y' = b - a y - x^2 y, a = 0.08."""
     return dy.System("selkov_user", [x, y], [-x + 0.08 * y + x**2 * y, p0 - 0.08 * y - x**2 * y], parameters={"b": b})

@@ -22,7 +22,9 @@ Error bars: the window is cut into ``n_blocks`` non-overlapping blocks of (nearl
 each block gives its own exponents, and the standard error is std(block estimates) / sqrt(n_blocks). A run is
 ``completed`` when every exponent is settled: its standard error is at most ``rtol`` of its distance from zero,
 or it is zero within ``ZSCORE`` standard errors and that band is at most ``rtol`` of the smallest settled
-nonzero |lambda| (the flow direction's 0). Otherwise, or with fewer than ``n_blocks`` intervals, the status is
+nonzero |lambda| (the flow direction's 0). At most ``zeros`` exponents (default 1, the flow direction; 2 on a torus
+or with a family of solutions) settle as zero, those nearest it: a weakly chaotic exponent that a short run cannot
+tell from zero leaves the run ``not_converged``, never a spectrum with a second zero called converged. Otherwise, or with fewer than ``n_blocks`` intervals, the status is
 ``not_converged`` and the message names the t_end that would settle it (error bars fall as 1/sqrt(time)).
 
 The system's terminal events (:class:`.system.Event`) end a run with their name as its status; the exponents
@@ -49,6 +51,7 @@ DT = 0.1  # re-orthonormalisation interval (s for the tippedisk)
 N_BLOCKS = 10  # non-overlapping blocks of the window for the standard errors
 RTOL = 0.1  # an exponent is settled when its standard error is at most this share of |lambda|
 ZSCORE = 3.0  # an exponent within this many standard errors of 0 is zero within its error bar
+ZEROS = 1  # exponents that may settle as zero: the flow direction's
 LIOUVILLE_RTOL = 1e-6  # |sum - mean divergence| allowed, relative to max(sum |lambda_i|, |mean divergence|)
 
 
@@ -99,15 +102,19 @@ def block_statistics(history_time: np.ndarray, log_sums: np.ndarray, n_blocks: i
 
 
 def convergence(exponents, errors, n_blocks_used: int, n_blocks: int, rtol: float, window: float,
-                transient: float) -> tuple[bool, str]:
-    """(settled, one-line reason naming the t_end that would settle it); see the module docstring."""
+                transient: float, zeros: int = ZEROS) -> tuple[bool, str]:
+    """(settled, one-line reason naming the t_end that would settle it); at most ``zeros`` exponents (those
+    nearest zero) may settle as zero; see the module docstring."""
     if errors is None or n_blocks_used < n_blocks:
         need = transient + 2 * n_blocks * window / max(n_blocks_used, 1)
         return False, (f"not converged: {n_blocks_used} re-orthonormalisation intervals make fewer than {n_blocks} "
                        f"blocks for error bars; give t_end >= {need:.4g} (t_end includes the transient)")
     lam, err = np.abs(exponents), np.asarray(errors)
     nonzero = err <= rtol * lam
-    zero = lam <= ZSCORE * err
+    zero = (lam <= ZSCORE * err) & ~nonzero
+    if zero.sum() > zeros:  # only the `zeros` nearest zero may be zeros; the others must settle away from it
+        keep = np.flatnonzero(zero)[np.argsort(lam[zero])[:zeros]]
+        zero = np.isin(np.arange(len(lam)), keep)
     if not nonzero.any():
         ratio = np.divide(err, rtol * lam, out=np.full(len(lam), np.inf), where=lam > 0)
         longer = (f"give t_end >= {transient + 1.2 * float(ratio.min()) ** 2 * window:.4g}"
@@ -122,8 +129,14 @@ def convergence(exponents, errors, n_blocks_used: int, n_blocks: int, rtol: floa
     reachable = np.maximum(allowed, rtol * lam)  # a zero-looking exponent may also settle away from zero
     i = bad[np.argmax(err[bad] / reachable[bad])]
     factor = 1.2 * float(np.max(err[bad] / reachable[bad])) ** 2
-    what = (f"zero within {ZSCORE:g} error bars, a band wider than rtol {rtol:g} of the smallest settled "
-            f"|lambda| {lam[nonzero].min():.4g}" if zero[i] else f"its error bar exceeds rtol {rtol:g} of |lambda|")
+    if zero[i]:
+        what = (f"zero within {ZSCORE:g} error bars, a band wider than rtol {rtol:g} of the smallest settled "
+                f"|lambda| {lam[nonzero].min():.4g}")
+    elif lam[i] <= ZSCORE * err[i]:
+        what = (f"not told from zero, and only {zeros} exponent(s) may be zero (the flow direction; give zeros=2 "
+                f"on a torus or a family of solutions)")
+    else:
+        what = f"its error bar exceeds rtol {rtol:g} of |lambda|"
     return False, (f"not converged: lambda_{i + 1} = {exponents[i]:.4g} +- {err[i]:.2g} ({what}); give "
                    f"t_end >= {transient + factor * window:.4g} (t_end includes the transient {transient:g})")
 
@@ -150,11 +163,13 @@ def _validated(system: System, state, n_exponents, t_end, dt, transient, n_block
 
 def spectrum(system: System, state, pars=None, *, n_exponents: int | None = None, t_end: float = 100.0,
              dt: float = DT, transient: float = 0.0, tol: float = TOL, divergence: bool = True,
-             n_blocks: int = N_BLOCKS, rtol: float = RTOL) -> LyapunovResult:
+             n_blocks: int = N_BLOCKS, rtol: float = RTOL, zeros: int = ZEROS) -> LyapunovResult:
     """The k = ``n_exponents`` (default all) largest Lyapunov exponents averaged over [transient, t_end] of the
     run from ``state`` at t = 0, with standard errors from ``n_blocks`` blocks; ``divergence``: integrate
     tr(df/dx) along the same run. The system's terminal events end a run with their name as its status."""
     k, x0 = _validated(system, state, n_exponents, t_end, dt, transient, n_blocks, rtol)
+    if int(zeros) != zeros or not 0 <= zeros <= k:
+        raise ParameterError(f"zeros = {zeros!r}; give how many exponents may be zero, 0 .. {k} (1: the flow direction)")
     n = system.n
     events = system.events
     extra = [(hy.make_vars("divergence_integral"), divergence_expression(system))] if divergence else []
@@ -216,12 +231,12 @@ def spectrum(system: System, state, pars=None, *, n_exponents: int | None = None
     blocks, errors = block_statistics(times, log_sums, int(n_blocks))
     if status == "completed":
         status, message = _checked(exponents, errors, blocks, div_mean, k == n, int(n_blocks), rtol, times[-1],
-                                   transient, t_end)
+                                   transient, t_end, int(zeros))
     return LyapunovResult(exponents, times, log_sums / times[:, None], status, message, float(ta.time), div_mean,
                           np.array(ta.state[:n]), errors, blocks)
 
 
-def _checked(exponents, errors, blocks, div_mean, full, n_blocks, rtol, window, transient, t_end):
+def _checked(exponents, errors, blocks, div_mean, full, n_blocks, rtol, window, transient, t_end, zeros):
     """(status, message) of a run that reached t_end: not_verified (Liouville), not_converged or completed."""
     if full and math.isfinite(div_mean):
         miss = abs(exponents.sum() - div_mean)
@@ -229,7 +244,7 @@ def _checked(exponents, errors, blocks, div_mean, full, n_blocks, rtol, window, 
             return "not_verified", (f"the sum of the exponents {exponents.sum():.8g} misses the mean divergence "
                                     f"{div_mean:.8g} by {miss:.2g}; give a smaller dt or tol")
     settled, reason = convergence(exponents, errors, 0 if blocks is None else len(blocks), n_blocks, rtol, window,
-                                  transient)
+                                  transient, zeros)
     window_text = f"averaged over [{transient:g}, {t_end:g}]"
     return ("completed", f"reached t_end = {t_end:g}, {window_text}") if settled else ("not_converged", reason)
 
@@ -278,13 +293,14 @@ def spectrum_dataset(result: LyapunovResult, system: System, config: dict, pars=
 
 def lyapunov_spectrum(system: System, state, pars=None, *, t_end: float = 100.0, dt: float = 1.0,
                       transient: float = 0.0, n_exponents: int | None = None, tol: float = TOL,
-                      n_blocks: int = N_BLOCKS, rtol: float = RTOL) -> xr.Dataset:
+                      n_blocks: int = N_BLOCKS, rtol: float = RTOL, zeros: int = ZEROS) -> xr.Dataset:
     """The Lyapunov spectrum of ``system`` averaged over [transient, t_end] of the run from ``state`` at t = 0
     (``t_end`` includes the transient), as kind ``lyapunov``: ``exponents`` with ``exponent_error`` (standard
     errors from ``n_blocks`` blocks), ``running_exponents`` along ``history`` and the mean divergence of the same
-    run that their sum equals; status ``completed`` only when converged (module docstring)."""
+    run that their sum equals; status ``completed`` only when converged, with at most ``zeros`` exponents zero
+    (1: the flow direction; 2 on a torus or a family of solutions) (module docstring)."""
     result = spectrum(system, state, pars, n_exponents=n_exponents, t_end=t_end, dt=dt, transient=transient, tol=tol,
-                      n_blocks=n_blocks, rtol=rtol)
+                      n_blocks=n_blocks, rtol=rtol, zeros=zeros)
     config = {"state0": list(map(float, state)), "t_end": t_end, "dt": dt, "transient": transient, "tol": tol,
-              "n_blocks": n_blocks, "rtol": rtol, "pars": list(map(float, system.with_pars(pars)))}
+              "n_blocks": n_blocks, "rtol": rtol, "zeros": zeros, "pars": list(map(float, system.with_pars(pars)))}
     return spectrum_dataset(result, system, config, system.with_pars(pars))
