@@ -121,3 +121,5 @@ def test_bad_block_requests_are_one_line_errors():
         dy.lyapunov_spectrum(system, [1.0, 1.0, 1.0], n_blocks=1)
     with pytest.raises(ParameterError, match="rtol"):
         dy.lyapunov_spectrum(system, [1.0, 1.0, 1.0], rtol=0.0)
+    with pytest.raises(ParameterError, match="zeros"):
+        dy.lyapunov_spectrum(system, [1.0, 1.0, 1.0], zeros=4)
