@@ -75,24 +75,3 @@ def test_the_readme_links_resolve():
     assert len(targets) > 10
     missing = [t for t in targets if not (root / t).exists()]
     assert not missing, f"README links to missing files: {missing}"
-
-
-@pytest.mark.slow
-def test_the_site_renders_math_titles_and_tutorial_figures(tmp_path):
-    """The built site as a reader sees it: formulas go to MathJax (not raw text), no page title carries an
-    internal issue number, every tutorial shows at least one figure."""
-    import subprocess
-    import sys
-
-    out = tmp_path / "html"
-    proc = subprocess.run([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-b", "html", str(DOCS),
-                           str(out)], capture_output=True, text=True)
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    models = (out / "models.html").read_text()
-    assert models.count('class="math notranslate nohighlight"') >= 5 and "mathjax" in models.lower()
-    assert r"\tag{2.29}" in models or "(2.29)" in models
-    titles = {p.name: re.search(r"<title>(.*?)</title>", p.read_text(), re.S).group(1) for p in out.rglob("*.html")}
-    assert not [name for name, title in titles.items() if "(issue" in title]
-    tutorials = sorted((out / "tutorials").glob("*.html"))
-    assert len(tutorials) == len(list((DOCS / "tutorials").glob("*.md")))
-    assert not [p.name for p in tutorials if "<img" not in p.read_text()]

@@ -2,7 +2,9 @@
 landing page with a quick start.
 
 Reads docs/_build/html when it is newer than every source page; otherwise builds the site once per session
-into a temporary folder (the tutorials' outputs come from the build's cache, docs/_build/.jupyter_cache).
+into a temporary folder (the tutorials' outputs come from the build's cache, docs/_build/.jupyter_cache). Every
+check of the built site lives here, so that a test run builds it at most once; they are slow checks (a fresh build
+executes the tutorials).
 """
 
 from __future__ import annotations
@@ -14,6 +16,8 @@ import sys
 from pathlib import Path
 
 import pytest
+
+pytestmark = pytest.mark.slow
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
 MAX_WORDS = 4000
@@ -123,3 +127,16 @@ def test_the_landing_page_has_a_quick_start(site):
     assert "source .venv/bin/activate" in block or ".venv/bin/tippedisk" in block
     assert len([line for line in block.splitlines() if line.strip()]) <= 6
     assert "<img" in body and "paper.html" in body and "tutorials/" in body and "_generated/api.html" in body
+
+
+def test_the_site_renders_math_titles_and_tutorial_figures(site):
+    """Formulas go to MathJax (not raw text), no page title carries an internal issue number, every tutorial shows
+    at least one figure."""
+    models = (site / "models.html").read_text()
+    assert models.count('class="math notranslate nohighlight"') >= 5 and "mathjax" in models.lower()
+    assert r"\tag{2.29}" in models or "(2.29)" in models
+    titles = {p.name: re.search(r"<title>(.*?)</title>", p.read_text(), re.S).group(1) for p in site.rglob("*.html")}
+    assert not [name for name, title in titles.items() if "(issue" in title]
+    tutorials = sorted((site / "tutorials").glob("*.html"))
+    assert len(tutorials) == len(list((DOCS / "tutorials").glob("*.md")))
+    assert not [p.name for p in tutorials if "<img" not in p.read_text()]
