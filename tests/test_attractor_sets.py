@@ -134,6 +134,29 @@ def test_henon_heiles_is_conservative_with_no_attractors_and_the_energy_of_each_
         assert "integral_level" not in ds
 
 
+def test_henon_heiles_starts_above_the_escape_energy_diverge_and_their_batch_mates_stay_bounded():
+    """Starts with px = py = 0.1 over (x, y) in [-0.4, 0.4]^2: four corners lie above the escape energy 1/6 and blow
+    up in finite time (scipy: |x| + |y| passes 10 within 30 time units); every other start stays bounded to t = 300.
+    A run that escapes ends the batch's integration for the runs beside it: those are run again, never `failed`."""
+    axes = {"x": (-0.4, 0.4, 11), "y": (-0.4, 0.4, 11)}
+    ds = dy.basins(henon_heiles(), dy.Grid(("x", "y", "px", "py"), (-1, -1, -1, -1), (1, 1, 1, 1), (40, 40, 40, 40)),
+                   axes, state=[0, 0, 0.1, 0.1], horizon=300.0, progress=False)
+    flags = dict(zip(ds.outcome.attrs["flag_meanings"].split(), ds.outcome.attrs["flag_values"]))
+
+    def escape(t, s):
+        return abs(s[0]) + abs(s[1]) - 10.0
+    escape.terminal = True
+    expected = np.full((11, 11), flags["bounded"])
+    for i, x0 in enumerate(np.linspace(*axes["x"])):
+        for j, y0 in enumerate(np.linspace(*axes["y"])):
+            run = solve_ivp(lambda t, s: [s[2], s[3], -s[0] - 2 * s[0] * s[1], -s[1] - s[0] ** 2 + s[1] ** 2],
+                            (0.0, 30.0), [x0, y0, 0.1, 0.1], method="DOP853", rtol=1e-10, atol=1e-12, events=escape)
+            if run.status == 1:
+                expected[i, j] = flags["diverged"]
+    assert (expected == flags["diverged"]).sum() == 4
+    np.testing.assert_array_equal(ds.outcome.values, expected)
+
+
 def test_lotka_volterra_centre_is_conservative_though_its_divergence_is_not_zero_pointwise():
     """x' = x (1 - y), y' = y (x - 1): div f = x - y, zero only on average over an orbit (d/dt log(x y)); the levels
     of V = x - log x + y - log y are those of the starts."""

@@ -140,14 +140,7 @@ def sample_runs(problem, settings: RecurrenceSettings, x0, pars, batch_size: int
     err_nf = hy.taylor_outcome.err_nf_state
     for first in range(0, N, B):
         lanes = np.minimum(np.arange(first, first + B), N - 1)  # idle lanes repeat the last start
-        ta = copy.copy(template)
-        ta.set_time(np.zeros(B))
-        ta.state[:] = x0[:, lanes]
-        if ta.pars.size:
-            ta.pars[:] = np.repeat(pars[: ta.pars.shape[0], None], B, axis=1)
-        if problem.terminal_labels:
-            ta.reset_cooldowns()
-        out = ta.propagate_grid(np.repeat(times[:, None], B, axis=1))[-1]  # (K, n, B), NaN after a stop
+        out, ends = _block_runs(template, problem, x0[:, lanes], times, pars)
         for lane, p in enumerate(range(first, min(first + B, N))):
             X = out[:, :, lane].T
             finite = np.all(np.isfinite(X), axis=0)
@@ -155,12 +148,15 @@ def sample_runs(problem, settings: RecurrenceSettings, x0, pars, batch_size: int
             X = X[:, :k]
             keys = problem.grid.keys(problem.observe(X, pars)) if k else np.zeros(0, dtype=np.int64)
             outside = np.flatnonzero(keys < 0)
-            res = ta.propagate_res[lane][0]
+            res, t_stop, x_stop = ends[lane]
             event = system.stopping_event(res, problem.terminal_labels)
             if event is not None:
-                label, end = problem.terminal_labels[event], float(ta.time[lane])
-            elif res == err_nf or k < len(times):
-                label, end = (DIVERGED if len(outside) else "failed"), float(times[max(k - 1, 0)])
+                label, end = problem.terminal_labels[event], t_stop
+            elif res == err_nf or k < len(times):  # non-finite: an escape if it was outside the grid on the way
+                # heyoka stops at the step that overflowed: its finite components tell an escape to infinity
+                last = np.nan_to_num(x_stop[:, None], nan=0.0, posinf=1e300, neginf=-1e300)
+                gone = len(outside) or problem.grid.keys(problem.observe(last, pars))[0] < 0
+                label, end = (DIVERGED if gone else "failed"), float(times[max(k - 1, 0)])
             elif len(outside):
                 label, end = "left_grid", float(times[outside[0]])
             else:
@@ -175,6 +171,31 @@ def sample_runs(problem, settings: RecurrenceSettings, x0, pars, batch_size: int
                 runs.level[:, p] = levels[:, 0]
                 runs.drift[:, p] = np.max(np.abs(levels - levels[:, :1]), axis=1)
     return runs
+
+
+def _block_runs(template, problem, x0: np.ndarray, times: np.ndarray, pars: np.ndarray) -> tuple[np.ndarray, list]:
+    """The samples (K, n, B) at ``times`` of the batch's runs from x0 (n, B), NaN after a run stops, and per lane
+    (outcome, time, state) where it stopped. heyoka ends a batch's ``propagate_grid`` for every lane when one lane
+    fails or stops at an event: a lane cut short that way is run again in a batch of its own start only."""
+    def propagate(starts):
+        ta = copy.copy(template)
+        B = ta.batch_size
+        ta.set_time(np.zeros(B))
+        ta.state[:] = starts
+        if ta.pars.size:
+            ta.pars[:] = np.repeat(pars[: ta.pars.shape[0], None], B, axis=1)
+        if problem.terminal_labels:
+            ta.reset_cooldowns()
+        out = ta.propagate_grid(np.repeat(times[:, None], B, axis=1))[-1]
+        return out, [(ta.propagate_res[i][0], float(ta.time[i]), np.array(ta.state[:, i])) for i in range(B)]
+
+    out, ends = propagate(x0)
+    own_end = (hy.taylor_outcome.time_limit, hy.taylor_outcome.err_nf_state)
+    for lane, (res, _, _) in enumerate(ends):
+        if res not in own_end and problem.system.stopping_event(res, problem.terminal_labels) is None:
+            alone, alone_ends = propagate(np.repeat(x0[:, lane:lane + 1], x0.shape[1], axis=1))
+            out[:, :, lane], ends[lane] = alone[:, :, 0], alone_ends[0]
+    return out, ends
 
 
 def volume_test(problem, settings: RecurrenceSettings, axes: dict, state, pars, batch_size: int) -> VolumeTest:

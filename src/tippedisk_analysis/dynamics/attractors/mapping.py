@@ -167,9 +167,13 @@ def map_points(problem: Problem, settings: RecurrenceSettings, x0, pars, groups=
                 table.setdefault(k, idx)
         return idx
 
-    def escaped(lane: _Lane) -> int:
-        """The label of a run that became non-finite: ``diverged`` if it was outside the grid and moving
-        away (escape to infinity), ``failed`` (a numerical failure) otherwise."""
+    def escaped(lane: _Lane, x_stop, pars_stop) -> int:
+        """The label of a run that became non-finite: ``diverged`` if it was outside the grid on the way (escape to
+        infinity: samples outside, or the finite components of ``x_stop``, the state where heyoka stopped, outside
+        the grid), ``failed`` (a numerical failure) otherwise."""
+        if problem.escapes and lane.lost == 0:
+            last = np.nan_to_num(np.asarray(x_stop, dtype=float)[:, None], nan=0.0, posinf=1e300, neginf=-1e300)
+            lane.lost += int(problem.grid.keys(problem.observe(last, pars_stop))[0] < 0)
         return label_of[DIVERGED] if problem.escapes and lane.lost > 0 else label_of["failed"]
 
     def step(lane: _Lane, t: float, x, y, key: int):
@@ -270,7 +274,8 @@ def map_points(problem: Problem, settings: RecurrenceSettings, x0, pars, groups=
                     continue
                 lane.k = k + 1
                 if not finite[q]:
-                    decided = (escaped(lane), k * dt, np.nan_to_num(X[:, q]), np.zeros(D))
+                    decided = (escaped(lane, ta.state[:, i], P[:, q:q + 1]), k * dt, np.nan_to_num(X[:, q]),
+                               np.zeros(D))
                     continue
                 lab = step(lane, k * dt, X[:, q], Y[:, q], int(KEY[q]))
                 lane.last = (k * dt, X[:, q], Y[:, q])
@@ -286,7 +291,8 @@ def map_points(problem: Problem, settings: RecurrenceSettings, x0, pars, groups=
                 y_now = problem.observe(x_now[:, None], np.array(ta.pars)[:, i:i + 1])[:, 0]
                 finish(i, label_of[problem.terminal_labels[e]], float(ta.time[i]), x_now, y_now)
             elif oc == err_nf:
-                finish(i, escaped(lane), float(ta.time[i]), np.nan_to_num(x_now), np.zeros(D))
+                finish(i, escaped(lane, x_now, np.array(ta.pars)[:, i:i + 1]), float(ta.time[i]),
+                       np.nan_to_num(x_now), np.zeros(D))
             elif lane.k > k_last:  # the horizon: the last sample is the final state
                 t_last, x_last, y_last = lane.last
                 finish(i, label_of["undecided"], t_last, x_last, y_last)
