@@ -14,14 +14,14 @@ ntst m nodes, T[, p]). Equations:
 
 The Jacobian is a scipy sparse matrix: one block of n m x n (m + 1) entries per interval, the T and p columns and
 the border rows, from one call of the System's compiled linearisation (f, f_x, f_p) at all Gauss points; no dense
-matrix of its size is formed. The Floquet multipliers come from the same blocks by condensation of parameters
-and a stable elimination of the mesh points (AUTO-07p's method): a pencil (L, R) whose eigenvalues are the
-multipliers, accurate also where the monodromy's entries are large. Near a homoclinic orbit the multipliers
-are ill-conditioned (the monodromy's entries grow like exp(lambda_u T)) and the collocation's discretisation error
-is amplified: where the flow direction's multiplier is off 1 by more than the multipliers' margin allows
-(:func:`.orbit_base.multipliers_decide`), the orbit is corrected by single shooting from x(0) and its
-multipliers come from the shooting monodromy (heyoka's variational equations), if those pass the check better;
-every orbit records which (``multiplier_source``) and the check (``flow_multiplier_error``).
+matrix of its size is formed. The Floquet multipliers come from the same blocks: condensed per mesh interval to
+pencils (A_j, B_j) with A_j x_j + B_j x_j+1 = 0, their product's eigenvalues by periodic QR sweeps
+(:mod:`.periodic_schur`), never the monodromy formed: each multiplier keeps its relative accuracy where they
+spread over many orders of magnitude (violently unstable, fast-slow orbits). Stability and the test functions
+count the multipliers outside the unit circle and measure their distances from +1, -1 and the circle
+(:meth:`CollocationProblem.tests`), bounded however large the multipliers are. A singular block makes the orbit's
+multipliers NaN with the reason in its message, never an exception. Shooting referees an orbit on request
+(:func:`.orbits.find_orbit` with method ``shooting`` from its x(0) and period), not on every orbit.
 
 Every ``adapt`` accepted points of a branch the mesh is adapted (equidistributing the error estimate,
 :meth:`.collocation_mesh.Mesh.adapted`) and the orbit interpolated onto it; where an orbit's estimated error
@@ -34,15 +34,13 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import scipy.linalg
 
 from ..errors import ParameterError
 from .collocation_mesh import Mesh
 from .collocation_solver import Factorisation, Linearisation, assemble, sparse_jacobian
-from .flows import TAYLOR_TOL, Flow, FlowError, floquet
-from .orbit_base import (N_SAMPLES, OrbitProblem, PeriodicOrbit, flow_multiplier_error, multipliers_decide, newton,
-                         orbit_size)
-from .shooting import ShootingProblem
+from .flows import TAYLOR_TOL, Flow, FlowError
+from .orbit_base import N_SAMPLES, OrbitProblem, PeriodicOrbit, orbit_size
+from .periodic_schur import product_eigenvalues
 from .system import System
 
 NTST, NCOL = 40, 4  # default mesh intervals and collocation points per interval
@@ -51,13 +49,13 @@ ERROR_TOL = 1e-6  # largest estimated error of x(t) / state_scale on a branch be
 NTST_GROWTH = 16  # ... up to this many times the start's intervals (ntst_max)
 GROWTH_MARGIN = 2.0  # a mesh that grows aims at error_tol / GROWTH_MARGIN
 MESH_PASSES = 4  # adaptations of the mesh to an integrated guess before the first Newton step
-VERIFY_TOL, VERIFY_ITERATIONS = 1e-10, 12  # the single shooting that checks an orbit whose multipliers fail
 SPECTRA_KEPT = 1000  # multipliers of orbits kept for the dataset of a branch
 REMESH_CHANGE = 1e-3  # a new mesh is taken if a mesh point moves by more than this share of its interval
 
 
 class _Evaluation(dict):
-    """The evaluation of u; ``M`` (monodromy), ``f0`` and ``half`` are computed when first asked for."""
+    """The evaluation of u; ``multipliers``, ``M`` (monodromy), ``f0`` and ``half`` are computed when first asked
+    for."""
 
     def __init__(self, compute, **items):
         super().__init__(**items)
@@ -101,7 +99,7 @@ class CollocationProblem(OrbitProblem):
         self._tiled = None  # (parameters, points, count) and the parameters tiled over the Gauss points
         self._memo: dict = {}
         self._spectra: dict = {}  # (u, mesh) -> the multipliers of an orbit evaluated before
-        self._shooting = None  # the single-shooting problem that checks orbits whose multipliers fail
+        self._basis = None  # the last periodic Schur basis at x(0): the next orbit's sweeps start from it
         self._phase = np.zeros(0)
         self.use(self.mesh)
 
@@ -276,28 +274,18 @@ class CollocationProblem(OrbitProblem):
                            T=T, pars=pars, blocks=blocks, extras=np.stack(columns, axis=2), key=key)
 
     def _lazy(self, ev: dict, key: str):
-        if key == "pencil":  # the block elimination without border rows
+        if key == "condensed":  # the stage-1 blocks of the elimination, without border rows
             return Factorisation(ev["blocks"], ev["extras"], np.zeros((0, self.n_nodes, self.n)),
-                                 np.zeros((0, self.x_start)), self.mesh.m).pencil
-        if key == "eig":  # the pencil's, or the integrated monodromy's where the pencil's fail their check
+                                 np.zeros((0, self.x_start)), self.mesh.m).condensed
+        if key == "multipliers":  # (mu by modulus descending, trivial and flow masks, flow error, status, message)
             known = self._spectra.get(ev["key"])  # a point of the branch: the dataset asks again
             if known is None:
-                known = self._spectra[ev["key"]] = self._spectrum(ev)
+                known = self._spectra[ev["key"]] = self._multipliers(ev)
                 if len(self._spectra) > SPECTRA_KEPT:
                     self._spectra.pop(next(iter(self._spectra)))
-            eig, ev["multiplier_source"], monodromy = known
-            if monodromy is not None:
-                ev["M"] = monodromy
-            return eig
-        if key == "multiplier_source":
-            ev["eig"]
-            return ev["multiplier_source"]
-        if key == "M":
-            ev["eig"]
-            if "M" in ev:
-                return ev["M"]
-            L, R = ev["pencil"]
-            return -np.linalg.solve(R, L)
+            return known
+        if key == "M":  # the monodromy formed (for inspection and branch switching; the multipliers never use it)
+            return _formed_monodromy(*ev["condensed"])
         if key == "f0":
             return self.system.f(ev["X"][0], ev["pars"])
         if key == "size":
@@ -307,44 +295,62 @@ class CollocationProblem(OrbitProblem):
             return (ev["X"][0] - x_half) / np.asarray(self.system.state_scale)
         raise KeyError(key)
 
-    def _spectrum(self, ev: dict) -> tuple:
-        """(eigenvalues and eigenvectors, their source, the integrated monodromy or None): the pencil's, or where
-        those fail their check (:func:`.orbit_base.multipliers_decide`) the monodromy's of the orbit corrected by
-        single shooting, if its multipliers pass it better (module docstring)."""
-        L, R = ev["pencil"]
-        eig = scipy.linalg.eig(L, -R)
-        mu, trivial = floquet(None, ev["f0"], self.system.n_trivial, eig)
-        if multipliers_decide(mu[~trivial], flow_multiplier_error(eig, ev["f0"])):
-            return eig, "collocation", None
-        x0 = ev["X"][0]
-        levels = dict(zip(self.integral_names, self._integrals.values(x0, ev["pars"]))) if self.integral_names else {}
-        pins = {name: float(x0[self.system.state_index(name)]) for name in self.pins}
-        if self._shooting is None:
-            self._shooting = ShootingProblem(self.system, ev["pars"], tol=self.flow.tol, levels=levels, pins=pins)
-        shooting = self._shooting  # the orbit's parameters, levels and pinned values, its period as the scale
-        shooting.pars, shooting.levels, shooting.pins, shooting.scale[-1] = ev["pars"], levels, pins, ev["T"]
-        shooting._memo.clear()
-        status, u, _it, _F = newton(shooting, shooting.pack(ev["X"][:1], ev["T"]), VERIFY_TOL, VERIFY_ITERATIONS)
-        if status != "converged":
-            return eig, "collocation", None
-        M = shooting.monodromy(u)
-        checked = np.linalg.eig(M)
-        if flow_multiplier_error(checked, self.system.f(shooting.split(u)[0][0], ev["pars"])) < \
-                flow_multiplier_error(eig, ev["f0"]):
-            return checked, "shooting", M
-        return eig, "collocation", None
+    def _multipliers(self, ev: dict) -> tuple:
+        """(multipliers by modulus descending, trivial mask, flow direction's mask, its |mu - 1|, status, message)
+        from the condensed blocks (:mod:`.periodic_schur`); the trivial ones: the flow direction's and the
+        n_trivial - 1 others nearest 1."""
+        spectrum = product_eigenvalues(*ev["condensed"], basis=self._basis)
+        n = self.n
+        if not spectrum.completed:
+            none = np.zeros(n, bool)
+            return np.full(n, complex(np.nan)), none, none, math.nan, spectrum.status, spectrum.message
+        self._basis = spectrum.basis
+        flow = np.zeros(n, bool)
+        flow[spectrum.flow_index(ev["f0"])] = True
+        trivial = flow.copy()
+        for _ in range(self.system.n_trivial - 1):
+            rest = np.flatnonzero(~trivial)
+            trivial[rest[np.argmin(np.abs(spectrum.values[rest] - 1.0))]] = True
+        order = np.argsort(-spectrum.log_moduli, kind="stable")
+        return (spectrum.values[order], trivial[order], flow[order], float(abs(spectrum.values[flow][0] - 1.0)),
+                "completed", f"{spectrum.sweeps} periodic QR sweep(s)")
 
-    def eigen(self, ev: dict) -> tuple[np.ndarray, np.ndarray]:
-        return ev["eig"]
+    def floquet(self, ev: dict, n_trivial: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """(multipliers, trivial mask) of an evaluation from the condensed blocks; ``n_trivial`` = 1: the flow
+        direction's alone."""
+        mu, trivial, flow = ev["multipliers"][:3]
+        return mu, (flow if n_trivial == 1 else trivial)
+
+    def flow_multiplier_error(self, u) -> float:
+        """|mu - 1| of the flow direction's multiplier (from the condensed blocks; NaN where they fail)."""
+        ev = self._evaluate(u)
+        return math.nan if "error" in ev else ev["multipliers"][3]
 
     def state_eigenvalues(self, u) -> np.ndarray:
-        """The multipliers but the flow direction's, by real part descending (from the pencil)."""
+        """The multipliers but the flow direction's, by real part descending (NaN where they cannot be
+        computed)."""
         ev = self._evaluate(u)
         if "error" in ev:
             return np.full(self.n - 1, complex(math.nan))
         mu, flow = self.floquet(ev, n_trivial=1)
+        if not flow.any():
+            return np.full(self.n - 1, complex(math.nan))
         rest = mu[~flow]
         return rest[np.argsort(-rest.real, kind="stable")]
+
+    def tests(self, point) -> dict:
+        """The test functions of :meth:`.orbit_base.OrbitProblem.tests`, bounded for any size of multipliers: the
+        sign of prod (mu_i - 1) (the parity of the real multipliers below 1) times the distance of the nearest one
+        from 1; likewise prod (mu_i + 1) and prod_{i<j} (mu_i mu_j - 1); NaN where the multipliers fail their check
+        (:func:`.orbit_base.multipliers_decide`)."""
+        tests = super().tests(point)
+        mu = self._nontrivial(point.eigenvalues)
+        i, j = np.triu_indices(len(mu), 1)
+        for kind, values in (("branch_point", mu - 1.0), ("period_doubling", mu + 1.0),
+                             ("neimark_sacker", mu[i] * mu[j] - 1.0)):
+            if kind in tests and not math.isnan(tests[kind]):
+                tests[kind] = _signed_distance(values)
+        return tests
 
     def residual(self, u) -> np.ndarray:
         """The residual alone (no Jacobian: chord steps need none), unless u was evaluated already."""
@@ -387,8 +393,8 @@ class CollocationProblem(OrbitProblem):
             return Linearisation(None, None, None, scale, self.x_start, self.mesh, self.n)
         borders = self._borders(ev) if row is None else np.vstack([self._borders(ev), row / scale])
         lin = Linearisation(ev["blocks"], ev["extras"], borders, scale, self.x_start, self.mesh, self.n)
-        if "pencil" not in ev:  # the elimination of the mesh points does not see the border rows
-            ev["pencil"] = lin.factorisation.pencil
+        if "condensed" not in ev:  # the condensation of the intervals does not see the border rows
+            ev["condensed"] = lin.factorisation.condensed
         return lin
 
     def jacobian(self, u):
@@ -451,10 +457,10 @@ class CollocationProblem(OrbitProblem):
             ev = self._evaluate(u)
             if "error" in ev:
                 raise FlowError(ev["error"])
-            known = (ev["eig"], ev["multiplier_source"])
-        eig, source = known[0], known[1]
-        f0 = self.system.f(X[0], pars)
-        mu, trivial = floquet(None, f0, self.system.n_trivial, eig)
+            known = ev["multipliers"]
+        mu, trivial, _flow, flow_error, multiplier_status, multiplier_message = known
+        if multiplier_status != "completed":
+            message = "; ".join(filter(None, (message, multiplier_message)))
         samples = self.mesh.evaluate(X, np.arange(n_samples) / n_samples)
         if residual is None:
             residual = float(np.max(np.abs(self.residual(u)[: self.n_collocation].reshape(-1, self.n))
@@ -465,5 +471,28 @@ class CollocationProblem(OrbitProblem):
                              mu, trivial, T * np.arange(n_samples) / n_samples, samples, observables,
                              method="collocation",
                              discretisation_error=self.mesh.error_estimate(X, self.system.state_scale),
-                             mesh=self.mesh.tau.copy(), flow_multiplier_error=flow_multiplier_error(eig, f0),
-                             multiplier_source=source)
+                             mesh=self.mesh.tau.copy(), flow_multiplier_error=flow_error,
+                             multiplier_source="collocation")
+
+
+def _signed_distance(values: np.ndarray) -> float:
+    """The sign of Re prod(values) (complex values come in conjugate pairs) times min |values|: zero where one
+    of them is, and bounded whatever their size."""
+    values = np.asarray(values, dtype=complex)
+    if not values.size:
+        return 1.0
+    if np.any(np.isnan(values)):
+        return math.nan
+    real = values[np.abs(values.imag) <= 1e-12 * np.maximum(1.0, np.abs(values))].real
+    return float((-1.0) ** int(np.sum(real < 0)) * np.abs(values).min())
+
+
+def _formed_monodromy(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """prod_j (-B_j^-1 A_j) formed densely (NaN where a B_j is singular)."""
+    M = np.eye(A.shape[1])
+    try:
+        for A_j, B_j in zip(A, B):
+            M = -np.linalg.solve(B_j, A_j @ M)
+    except np.linalg.LinAlgError:
+        return np.full_like(M, np.nan)
+    return M

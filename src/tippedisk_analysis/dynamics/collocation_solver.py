@@ -1,6 +1,6 @@
 """The linear algebra of collocation (:mod:`.collocation`): the block-bordered Newton system solved by condensation of
-parameters and a sequential elimination of the mesh points (AUTO-07p's method), compiled with numba; and the Floquet
-pencil that falls out of the same elimination.
+parameters and a sequential elimination of the mesh points (AUTO-07p's method), compiled with numba; and the
+condensed blocks of the first stage, whose product is the monodromy.
 
 The system: per mesh interval j the collocation rows (m n) touch the interval's nodes (the mesh point x_j, m - 1
 interior nodes, the mesh point x_j+1; x_ntst = x_0) and the q extra unknowns (T, p); b border rows (the phase
@@ -10,8 +10,8 @@ sides (chord steps, tangents):
 
 1. in each interval the interior nodes are eliminated: n condensed rows A_j x_j + B_j x_j+1 + E_j e = r_j remain;
 2. the mesh points x_1 .. x_ntst-1 are eliminated one after the other from F x_0 + G x_j + H e = s, leaving
-   F x_0 + G x_ntst + H e = s; its homogeneous part (F, G) is the pencil whose eigenvalues are the Floquet
-   multipliers (Fairgrieve & Jepson's stable elimination);
+   F x_0 + G x_ntst + H e = s (the Floquet multipliers come from the condensed blocks of stage 1 instead, by
+   :mod:`.periodic_schur`: this elimination forms the product they span);
 3. (F + G) x_0 + H e = s with the condensed border rows: a dense (n + b) x (n + q) system (least squares if b != q).
 
 The border rows are condensed alongside (their coefficients on each eliminated unknown removed with the pivot rows).
@@ -284,6 +284,15 @@ class Factorisation:
     def __init__(self, blocks, extras, border_nodes, border_extras, m: int):
         self.m = m
         self.factors, self.pencil = factorise(blocks, extras, border_nodes, border_extras, m)
+
+    @property
+    def condensed(self) -> tuple[np.ndarray, np.ndarray]:
+        """The condensed blocks (A_j, B_j) (ntst, n, n): A_j x_j + B_j x_j+1 = 0 on each mesh interval once its
+        interior nodes are eliminated (the homogeneous part of stage 1; the Floquet multipliers are those of
+        prod_j (-B_j^-1 A_j), :mod:`.periodic_schur`)."""
+        cond = self.factors[4]
+        n = cond.shape[1]
+        return cond[:, :, n:2 * n], cond[:, :, 2 * n:3 * n]
 
     def solve(self, rhs_coll: np.ndarray, rhs_border: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(node corrections (ntst m, n), extras' corrections (q,)); least squares / least norm in the last stage

@@ -299,9 +299,17 @@ def orbit_size(states: np.ndarray, scale) -> float:
 def multipliers_decide(nontrivial: np.ndarray, flow_error: float) -> bool:
     """Whether multipliers whose flow direction's is off 1 by ``flow_error`` (their error scale) decide stability and
     the test functions: the error is at most TRIVIAL_TOL, or at most DECIDING_SHARE of the distance of the
-    ``nontrivial`` ones from the unit circle (where every one of them crosses) and at most DECIDING_CAP."""
-    margin = float(np.min(np.abs(np.abs(nontrivial) - 1.0))) if len(nontrivial) else math.inf
-    return bool(flow_error <= max(TRIVIAL_TOL, min(DECIDING_SHARE * margin, DECIDING_CAP)))
+    ``nontrivial`` ones from the unit circle (where every one of them crosses) and at most DECIDING_CAP, or in log
+    modulus, log(1 + error) at most DECIDING_SHARE of min |log |mu|| (a multiplier 1e-20 or 1e40 stays on its side
+    of the circle under an error that moves the flow direction's by 50 %)."""
+    if not len(nontrivial):
+        return bool(flow_error <= TRIVIAL_TOL)
+    modulus = np.abs(nontrivial)
+    margin = float(np.min(np.abs(modulus - 1.0)))
+    with np.errstate(divide="ignore"):
+        log_margin = float(np.min(np.abs(np.log(modulus))))
+    return bool(flow_error <= max(TRIVIAL_TOL, min(DECIDING_SHARE * margin, DECIDING_CAP))
+                or math.log1p(flow_error) <= DECIDING_SHARE * log_margin)
 
 
 def flow_multiplier_error(eigen: tuple, flow_direction: np.ndarray) -> float:
