@@ -10,7 +10,7 @@ import pytest
 import xarray as xr
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
-PAGES = ["getting_started.md", "python.md", "continuation.md", "periodic_orbits.md"]  # dynamics.md: its own test
+PAGES = ["getting_started.md", "python.md", "continuation.md", "periodic_orbits.md"]  # dynamics*.md: their own test
 BAD = ("failed", "nonfinite", "not_converged", "corrector_failed")
 
 
@@ -20,7 +20,7 @@ def code_blocks(page: str) -> list[str]:
 
 def test_every_page_with_python_examples_is_tested():
     with_code = {p.name for p in DOCS.glob("*.md") if code_blocks(p.name)}
-    assert with_code == set(PAGES) | {"dynamics.md"}
+    assert with_code == set(PAGES) | {"dynamics.md", "dynamics_hybrid.md"}
 
 
 @pytest.mark.slow

@@ -122,14 +122,16 @@ def test_a_section_of_a_quantity_the_system_does_not_have():
 
 
 def test_the_worked_example_of_docs_dynamics_runs_and_says_what_it_shows(tmp_path, monkeypatch):
-    """docs/dynamics.md's Brusselator (a = 1): its code blocks run as printed, and the page's claims hold: the
-    Hopf point at b = 1 + a^2 = 2 with frequency a = 1, stable orbits, the section's return time equal to the
-    shooting period, the Lyapunov exponents (0, Floquet exponent), one periodic attractor with that period."""
-    text = (Path(__file__).resolve().parents[1] / "docs" / "dynamics.md").read_text()
+    """docs/dynamics.md's Brusselator (a = 1) and docs/dynamics_hybrid.md's ball: their code blocks run as
+    printed, and the pages' claims hold: the Hopf point at b = 1 + a^2 = 2 with frequency a = 1, stable orbits,
+    the section's return time equal to the shooting period, the Lyapunov exponents (0, Floquet exponent), one
+    periodic attractor with that period; the ball's period-1 orbit."""
+    docs = Path(__file__).resolve().parents[1] / "docs"
     monkeypatch.chdir(tmp_path)
     ns: dict = {}
-    for block in re.findall(r"```python\n(.*?)```", text, re.S):
-        exec(compile(block, "docs/dynamics.md", "exec"), ns)
+    for page in ("dynamics.md", "dynamics_hybrid.md"):
+        for block in re.findall(r"```python\n(.*?)```", (docs / page).read_text(), re.S):
+            exec(compile(block, f"docs/{page}", "exec"), ns)
     eq, po, ps, ly, at, T = (ns[k] for k in ("eq", "po", "ps", "ly", "at", "T"))
     assert eq.attrs["labels"] == "HOPF1"
     i = int(eq.special_index[0])
