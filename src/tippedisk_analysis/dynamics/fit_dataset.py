@@ -1,0 +1,181 @@
+"""The result of :func:`.fitting.fit`: uncertainty, identifiability, status, and the dataset of kind ``fit``.
+
+At the optimum theta (p free values, m observed samples, residuals r, Jacobian J = dr/dtheta):
+s^2 = |r|^2 / (m - p) without sigma, 1 with it; D = diag(1 / |J_k|) (column norms); J D = U S V^T;
+cov = s^2 D V S^-2 V^T D over the singular values S_k >= ``identifiability_tol`` (a pseudo-inverse: the
+combinations below it are undetermined, named in the message and flagged per value). AIC and BIC compare models
+on the same data: m ln(|r|^2 / m) + 2p (+ p ln m) without sigma, |r|^2 + 2p (+ p ln m) with it.
+
+Dimensions: ``time`` (the samples), ``parameter`` (the free values, with ``parameter_units``; ``parameter_column``
+repeats it for matrices), ``combination`` (singular values, descending). Per observed series ``y``: the fitted run
+``y``, the data ``y_data``, the residual ``y_residual`` = data - fit, and ``y_used`` (0 at missing samples, where
+data and residual hold 0) if samples are missing; every state's fitted run too.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import xarray as xr
+
+from ..results import index_coordinate, make_attrs
+from .datasets import flag_attrs, label_coordinates, mixed_units
+
+STATUSES = ("completed", "not_converged", "not_identifiable", "bound_hit")
+KINDS = {"initial_state": 0, "parameter": 1}
+AT_BOUND = {"inside": 0, "lower": 1, "upper": 2}
+MIXED = "the units differ along parameter: see the coordinate parameter_units"
+
+
+@dataclass
+class Stage:
+    """One least-squares solve over the first ``n_samples`` samples."""
+
+    n_samples: int
+    theta: np.ndarray
+    status: int  # scipy's: > 0 converged, 0 max_nfev, -1 failed
+    nfev: int
+    njev: int
+    active: np.ndarray  # -1 lower bound, 1 upper bound, 0 inside
+    message: str
+
+
+def _combination(names, direction, values) -> str:
+    """A right singular vector (in the free values' own units) as relative changes, e.g. 'da/a : db/b = +0.71 :
+    -0.71' (absolute 'dx' for values at zero); components below 5 % are left out."""
+    rel = np.array([d / abs(v) if v != 0 else d for d, v in zip(direction, values)])
+    rel /= np.linalg.norm(rel)
+    keep = [i for i in range(len(rel)) if abs(rel[i]) >= 0.05]
+    if keep and rel[keep[0]] < 0:
+        rel = -rel
+    terms = [f"d{names[i]}/{names[i]}" if values[i] != 0 else f"d{names[i]}" for i in keep]
+    return f"{' : '.join(terms)} = {' : '.join(f'{rel[i]:+.3g}' for i in keep)}"
+
+
+def summary(problem, theta, identifiability_tol: float) -> dict:
+    """Residuals, covariance, correlations and the singular values of the column-scaled Jacobian of a
+    :class:`.fitting.FitProblem` at ``theta``."""
+    r, J = problem.residuals(theta), problem.jacobian(theta)
+    m, p = J.shape
+    rss = float(r @ r)
+    s2 = 1.0 if problem.sigma_given else rss / (m - p)
+    norms = np.linalg.norm(J, axis=0)
+    scale = np.where(norms > 0, 1.0 / np.where(norms > 0, norms, 1.0), 0.0)
+    _U, S, Vt = np.linalg.svd(J * scale, full_matrices=False)
+    kept = S >= identifiability_tol
+    V = Vt.T
+    cov = s2 * (scale[:, None] * (V[:, kept] / S[kept] ** 2) @ V[:, kept].T * scale[None, :])
+    stderr = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = cov / np.outer(stderr, stderr)
+    corr = np.where(np.outer(stderr, stderr) > 0, corr, 0.0)
+    np.fill_diagonal(corr, np.where(stderr > 0, 1.0, 0.0))
+    null = V[:, ~kept]
+    determined = (norms > 0) & (np.max(np.abs(null), axis=1, initial=0.0) < 0.1)
+    ic = (m * np.log(rss / m) if not problem.sigma_given and rss > 0 else rss)
+    return {"r": r, "rss": rss, "s2": s2, "m": m, "p": p, "norms": norms, "S": S, "V": V, "kept": kept, "cov": cov,
+            "stderr": stderr, "corr": corr, "determined": determined, "aic": ic + 2 * p, "bic": ic + p * np.log(m)}
+
+
+def status_of(problem, stage: Stage, stats: dict, theta, tol: float) -> tuple[str, str]:
+    """(status, one-line message naming what to change)."""
+    names = problem.free
+    misfit = problem.run(theta)[1] - problem.data
+    rms = ", ".join(f"{k} {np.sqrt(np.mean(misfit[problem.used[:, j], j] ** 2)):.3g}"
+                    for j, k in enumerate(problem.names))
+    notes = [f"rms residual {rms}"]
+    if stage.status <= 0:
+        return "not_converged", (f"the trust region stopped after {stage.nfev} runs ({stage.message}) with the "
+                                 f"residuals {rms}; raise max_nfev, give a start closer to the data or more horizons")
+    S, kept = stats["S"], stats["kept"]
+    if not kept.all():
+        flat = [names[i] for i in range(len(names)) if stats["norms"][i] == 0]
+        if flat:
+            what = f"the data do not depend on {', '.join(flat)}"
+        else:
+            k = int(np.flatnonzero(~kept)[-1])
+            direction = stats["V"][:, k] / stats["norms"]  # in the free values' own units
+            involved = [names[i] for i in range(len(names)) if abs(stats["V"][i, k]) >= 0.05]
+            what = (f"only a combination of {', '.join(involved)} is determined "
+                    f"({_combination(names, direction, theta)} leaves the fit unchanged: scaled singular value "
+                    f"{S[k]:.2g} < {tol:.2g})")
+        return "not_identifiable", f"{what}; fix all but one of them or add data that separates them ({notes[0]})"
+    corr = np.abs(stats["corr"] - np.eye(len(names)))
+    if len(names) > 1 and corr.max() > 0.99:
+        i, j = np.unravel_index(np.argmax(corr), corr.shape)
+        notes.append(f"{names[i]} and {names[j]} are correlated ({stats['corr'][i, j]:+.4f}): a longer or richer "
+                     "record separates them")
+    hit = [f"{names[i]} at its {'lower' if a < 0 else 'upper'} bound" for i, a in enumerate(stage.active) if a]
+    if hit:
+        return "bound_hit", f"{', '.join(hit)}; widen the bound if it is not physical ({'; '.join(notes)})"
+    return "completed", f"converged ({problem.runs} model runs); {'; '.join(notes)}"
+
+
+def fit_dataset(problem, stages: list[Stage], config: dict, identifiability_tol: float) -> xr.Dataset:
+    """The dataset of kind ``fit`` (module docstring)."""
+    system, last = problem.system, stages[-1]
+    theta = last.theta
+    stats = summary(problem, theta, identifiability_tol)
+    status, message = status_of(problem, last, stats, theta, identifiability_tol)
+    X, Y, _dY = problem.run(theta)
+    x0, pars = problem.unpack(theta)
+    names, p = problem.free, len(problem.free)
+    units = [system.units_of(k) for k in names]
+    coords = {**label_coordinates("parameter", names, units, "free value (initial state or parameter)"),
+              "parameter_column": ("parameter_column", np.array(names, dtype=str),
+                                   {"long_name": "free value (the columns of the matrices)"}),
+              "combination": index_coordinate("combination", p, "index of the singular value, descending"),
+              "time": ("time", problem.times, {"units": system.time_units, "long_name": "time of the sample"})}
+    per = ("parameter",)
+    data = {
+        "estimate": (per, theta, {**mixed_units("fitted value"), "comment": MIXED}),
+        "start": (per, problem.start, {**mixed_units("value at the start of the fit"), "comment": MIXED}),
+        "stderr": (per, stats["stderr"], {**mixed_units("standard error of the estimate (over the determined "
+                                                        "combinations)"), "comment": MIXED}),
+        "free_kind": (per, np.array([KINDS["initial_state" if k in system.state_names else "parameter"]
+                                     for k in names], np.int8), flag_attrs("what the free value is", KINDS)),
+        "determined": (per, stats["determined"].astype(np.int8),
+                       flag_attrs("whether the data determine the value (no: it lies along a combination "
+                                  "with a singular value below identifiability_tol)", {"no": 0, "yes": 1})),
+        "at_bound": (per, np.array([AT_BOUND["lower" if a < 0 else "upper" if a > 0 else "inside"]
+                                    for a in last.active], np.int8), flag_attrs("bound active at the estimate",
+                                                                                AT_BOUND)),
+        "jacobian_column_norm": (per, stats["norms"], {"long_name": "norm of the Jacobian's column d r / d value "
+                                                       "(the column scaling D^-1)", "comment": MIXED}),
+        "covariance": (("parameter", "parameter_column"), stats["cov"],
+                       {"long_name": "covariance of the estimates", "comment": "units: the product of the row's and "
+                        "the column's parameter_units"}),
+        "correlation": (("parameter", "parameter_column"), stats["corr"],
+                        {"units": "1", "long_name": "correlation of the estimates (0 for an undetermined value)"}),
+        "singular_value": ("combination", stats["S"], {"units": "1", "long_name": "singular value of the "
+                                                       "column-scaled Jacobian J D (columns of unit norm)"}),
+        "singular_vector": (("parameter", "combination"), stats["V"],
+                            {"units": "1", "long_name": "right singular vector of J D: the combination of the "
+                             "column-scaled free values each singular value belongs to"}),
+    }
+    for j, k in enumerate(problem.names):
+        u = system.units_of(k)
+        used = problem.used[:, j]
+        data[f"{k}_data"] = ("time", np.where(used, problem.data[:, j], 0.0),
+                             {"units": u, "long_name": f"measured {k}" + ("" if used.all() else " (0 where missing)")})
+        data[f"{k}_residual"] = ("time", np.where(used, problem.data[:, j] - Y[:, j], 0.0),
+                                 {"units": u, "long_name": f"residual of {k}: data - fit"
+                                  + ("" if used.all() else " (0 where missing)")})
+        if not used.all():
+            data[f"{k}_used"] = ("time", used.astype(np.int8), flag_attrs(f"whether the sample of {k} was measured",
+                                                                          {"missing": 0, "used": 1}))
+        if k in system.observables:
+            data[k] = ("time", Y[:, j], {"units": u, "long_name": f"fitted run: {k}"})
+    for i, k in enumerate(system.state_names):
+        data[k] = ("time", X[:, i], {"units": system.units_of(k), "long_name": f"fitted run: state {k}"})
+    attrs = make_attrs("fit", config, status, message, title=f"Fit of {system.name} to a record",
+                       **system.attrs(pars), initial_state="; ".join(f"{k} = {v!r}" for k, v in
+                                                                     zip(system.state_names, map(float, x0))),
+                       n_samples=int(stats["m"]), n_free=int(p), degrees_of_freedom=int(stats["m"] - p),
+                       residual_sum_of_squares=stats["rss"], residual_variance=stats["s2"],
+                       sigma_given=int(problem.sigma_given), aic=float(stats["aic"]), bic=float(stats["bic"]),
+                       identifiability_tol=float(identifiability_tol), model_runs=int(problem.runs),
+                       horizon_samples=" ".join(str(s.n_samples) for s in stages),
+                       least_squares_status=int(last.status))
+    return xr.Dataset(data, coords=coords, attrs=attrs)
