@@ -38,7 +38,7 @@ import numpy as np
 from ..errors import ParameterError
 from .collocation_mesh import Mesh
 from .collocation_solver import Factorisation, Linearisation, assemble, sparse_jacobian
-from .flows import TAYLOR_TOL, Flow, FlowError
+from .flows import MULTIPLIER_TOL, TAYLOR_TOL, Flow, FlowError
 from .orbit_base import N_SAMPLES, OrbitProblem, PeriodicOrbit, orbit_size
 from .periodic_schur import product_eigenvalues
 from .system import System
@@ -49,6 +49,7 @@ ERROR_TOL = 1e-6  # largest estimated error of x(t) / state_scale on a branch be
 NTST_GROWTH = 16  # ... up to this many times the start's intervals (ntst_max)
 GROWTH_MARGIN = 2.0  # a mesh that grows aims at error_tol / GROWTH_MARGIN
 MESH_PASSES = 4  # adaptations of the mesh to an integrated guess before the first Newton step
+ACCEPT_SHARE = 2.0  # a located crossing's multiplier may be this many flow-direction errors off the circle
 SPECTRA_KEPT = 1000  # multipliers of orbits kept for the dataset of a branch
 REMESH_CHANGE = 1e-3  # a new mesh is taken if a mesh point moves by more than this share of its interval
 
@@ -351,6 +352,16 @@ class CollocationProblem(OrbitProblem):
             if kind in tests and not math.isnan(tests[kind]):
                 tests[kind] = _signed_distance(values)
         return tests
+
+    def accept(self, kind: str, point, value: float, options):
+        """As :meth:`.orbit_base.OrbitProblem.accept`, with a located branch point, period doubling or
+        Neimark-Sacker point's critical multiplier allowed ACCEPT_SHARE times the flow direction's error off the
+        unit circle: the discretisation unfolds a crossing through +1 into two multipliers that avoid each other
+        by about that much."""
+        if kind in ("branch_point", "period_doubling", "neimark_sacker"):
+            allowed = max(MULTIPLIER_TOL, options.locate_tol, ACCEPT_SHARE * self.flow_multiplier_error(point.u))
+            return math.isfinite(value) and abs(value) <= allowed
+        return super().accept(kind, point, value, options)
 
     def residual(self, u) -> np.ndarray:
         """The residual alone (no Jacobian: chord steps need none), unless u was evaluated already."""
