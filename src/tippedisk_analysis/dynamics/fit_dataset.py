@@ -22,7 +22,8 @@ import xarray as xr
 from ..results import index_coordinate, make_attrs
 from .datasets import flag_attrs, label_coordinates, mixed_units
 
-STATUSES = ("completed", "not_converged", "not_identifiable", "bound_hit")
+STATUSES = ("completed", "not_converged", "bound_hit", "misfit", "not_identifiable")
+SYSTEMATIC = 0.5  # lag-1 autocorrelation of a series' residuals above which they are systematic (white noise: ~0)
 KINDS = {"initial_state": 0, "parameter": 1}
 AT_BOUND = {"inside": 0, "lower": 1, "upper": 2}
 MIXED = "the units differ along parameter: see the coordinate parameter_units"
@@ -78,16 +79,36 @@ def summary(problem, theta, identifiability_tol: float) -> dict:
             "stderr": stderr, "corr": corr, "determined": determined, "aic": ic + 2 * p, "bic": ic + p * np.log(m)}
 
 
+def autocorrelations(problem, misfit) -> dict[str, float]:
+    """Lag-1 autocorrelation of each observed series' residuals over its measured samples, in time order."""
+    out = {}
+    for j, k in enumerate(problem.names):
+        r = misfit[problem.used[:, j], j] * problem.scale[problem.used[:, j], j]
+        r = r - r.mean()
+        out[k] = float(r[1:] @ r[:-1] / (r @ r)) if r.size > 2 and r @ r > 0 else 0.0
+    return out
+
+
 def status_of(problem, stage: Stage, stats: dict, theta, tol: float) -> tuple[str, str]:
-    """(status, one-line message naming what to change)."""
+    """(status, one-line message naming what to change): every finding in the message, the status of the first in
+    the order not_converged, bound_hit (a bound can cause the others), misfit, not_identifiable."""
     names = problem.free
     misfit = problem.run(theta)[1] - problem.data
     rms = ", ".join(f"{k} {np.sqrt(np.mean(misfit[problem.used[:, j], j] ** 2)):.3g}"
                     for j, k in enumerate(problem.names))
-    notes = [f"rms residual {rms}"]
+    found = []  # (status, text)
     if stage.status <= 0:
-        return "not_converged", (f"the trust region stopped after {stage.nfev} runs ({stage.message}) with the "
-                                 f"residuals {rms}; raise max_nfev, give a start closer to the data or more horizons")
+        found.append(("not_converged", f"the trust region stopped after {stage.nfev} runs ({stage.message}); raise "
+                      "max_nfev, give a start closer to the data or more horizons"))
+    hit = [f"{names[i]} at its {'lower' if a < 0 else 'upper'} bound" for i, a in enumerate(stage.active) if a]
+    if hit:
+        found.append(("bound_hit", f"{', '.join(hit)}; widen the bound if it is not physical"))
+    systematic = {k: a for k, a in autocorrelations(problem, misfit).items() if a > SYSTEMATIC}
+    if systematic:
+        what = ", ".join(f"{k} {a:.2f}" for k, a in systematic.items())
+        found.append(("misfit", f"the residuals are systematic (lag-1 autocorrelation {what} > {SYSTEMATIC}): a "
+                      "local minimum or a model that does not describe the record; give a closer start or shorter "
+                      "first horizons (or expect this if the record's own noise is correlated)"))
     S, kept = stats["S"], stats["kept"]
     if not kept.all():
         flat = [names[i] for i in range(len(names)) if stats["norms"][i] == 0]
@@ -100,16 +121,16 @@ def status_of(problem, stage: Stage, stats: dict, theta, tol: float) -> tuple[st
             what = (f"only a combination of {', '.join(involved)} is determined "
                     f"({_combination(names, direction, theta)} leaves the fit unchanged: scaled singular value "
                     f"{S[k]:.2g} < {tol:.2g})")
-        return "not_identifiable", f"{what}; fix all but one of them or add data that separates them ({notes[0]})"
+        found.append(("not_identifiable", f"{what}; fix all but one of them or add data that separates them"))
     corr = np.abs(stats["corr"] - np.eye(len(names)))
-    if len(names) > 1 and corr.max() > 0.99:
+    if len(names) > 1 and corr.max() > 0.99 and kept.all():
         i, j = np.unravel_index(np.argmax(corr), corr.shape)
-        notes.append(f"{names[i]} and {names[j]} are correlated ({stats['corr'][i, j]:+.4f}): a longer or richer "
-                     "record separates them")
-    hit = [f"{names[i]} at its {'lower' if a < 0 else 'upper'} bound" for i, a in enumerate(stage.active) if a]
-    if hit:
-        return "bound_hit", f"{', '.join(hit)}; widen the bound if it is not physical ({'; '.join(notes)})"
-    return "completed", f"converged ({problem.runs} model runs); {'; '.join(notes)}"
+        found.append(("completed", f"{names[i]} and {names[j]} are correlated ({stats['corr'][i, j]:+.4f}): a "
+                      "longer or richer record separates them"))
+    order = ("not_converged", "bound_hit", "misfit", "not_identifiable", "completed")
+    status = min((s for s, _ in found), key=order.index, default="completed")
+    head = f"converged ({problem.runs} model runs)" if status == "completed" else f"{problem.runs} model runs"
+    return status, "; ".join([head, *(text for _, text in found), f"rms residual {rms}"])
 
 
 def fit_dataset(problem, stages: list[Stage], config: dict, identifiability_tol: float) -> xr.Dataset:
@@ -119,6 +140,7 @@ def fit_dataset(problem, stages: list[Stage], config: dict, identifiability_tol:
     stats = summary(problem, theta, identifiability_tol)
     status, message = status_of(problem, last, stats, theta, identifiability_tol)
     X, Y, _dY = problem.run(theta)
+    lag1 = autocorrelations(problem, Y - problem.data)
     x0, pars = problem.unpack(theta)
     names, p = problem.free, len(problem.free)
     units = [system.units_of(k) for k in names]
@@ -161,7 +183,8 @@ def fit_dataset(problem, stages: list[Stage], config: dict, identifiability_tol:
                              {"units": u, "long_name": f"measured {k}" + ("" if used.all() else " (0 where missing)")})
         data[f"{k}_residual"] = ("time", np.where(used, problem.data[:, j] - Y[:, j], 0.0),
                                  {"units": u, "long_name": f"residual of {k}: data - fit"
-                                  + ("" if used.all() else " (0 where missing)")})
+                                  + ("" if used.all() else " (0 where missing)"),
+                                  "lag1_autocorrelation": lag1[k]})
         if not used.all():
             data[f"{k}_used"] = ("time", used.astype(np.int8), flag_attrs(f"whether the sample of {k} was measured",
                                                                           {"missing": 0, "used": 1}))

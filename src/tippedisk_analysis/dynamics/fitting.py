@@ -5,7 +5,7 @@ observables y; their Jacobian dr/dtheta comes from heyoka's first-order variatio
 Taylor run (dx/dx0, dx/dp and the chain rule through the observables), never from finite differences.
 scipy.optimize.least_squares (trust region reflective, bounds) minimises |r|^2 / 2.
 
-Start: a continuation in the horizon. The fit to the first part of the record (default a quarter, then a half)
+Start: a continuation in the horizon. The fit to the first part of the record (default 1/16, then 1/8, 1/4, 1/2)
 starts the fit to the next part: a motion that rotates, oscillates or inverts has a rugged cost over a long record,
 while over a short one the start lies in the basin of the minimum and each longer fit starts close to its own.
 
@@ -85,6 +85,9 @@ class FitProblem:
         self.columns = [system.state_index(k) if k in system.state_names else
                         self.tangents + self.free_pars.index(k) for k in self.free]
         self.n_args = self.tangents + len(self.free_pars)
+        start = np.zeros((system.n, self.n_args))
+        start[range(self.tangents), range(self.tangents)] = 1.0  # d x0 / d x0[:tangents] = I, d x0 / d p = 0
+        self._variations0 = start.ravel()
         self._ta = copy.copy(system.taylor(self.tol, tangents=self.tangents, parameters=self.free_pars))
         self._observables = self._observable_function()
         self.runs = 0  # model runs (each with its sensitivities)
@@ -196,7 +199,7 @@ class FitProblem:
         ta.time = self.t0
         ta.pars[:] = pars[: len(ta.pars)]
         ta.state[:n] = x0
-        ta.state[n:] = np.eye(n, self.n_args).ravel()  # d x0 / d x0[:tangents] = I, d x0 / d p = 0
+        ta.state[n:] = self._variations0
         grid = self.times[:N] if self.times[0] == self.t0 else np.append(self.t0, self.times[:N])
         self.runs += 1
         res = ta.propagate_grid(grid, max_steps=MAX_STEPS)
@@ -240,7 +243,10 @@ class FitProblem:
         return (self.scale[:N, :, None] * dY)[self.used[:N]]
 
 
-def solve(problem: FitProblem, *, bounds=None, horizons=(0.25, 0.5, 1.0), max_nfev: int = 200) -> list[Stage]:
+HORIZONS = (0.0625, 0.125, 0.25, 0.5, 1.0)  # the continuation in the horizon: fractions of the record
+
+
+def solve(problem: FitProblem, *, bounds=None, horizons=HORIZONS, max_nfev: int = 200) -> list[Stage]:
     """Trust-region least squares on growing horizons (fractions of the record), each starting from the last."""
     p = len(problem.free)
     lower, upper = _bounds(problem, bounds)
@@ -248,7 +254,7 @@ def solve(problem: FitProblem, *, bounds=None, horizons=(0.25, 0.5, 1.0), max_nf
     if not fractions or fractions[-1] != 1.0 or not 0 < fractions[0] or\
             any(a >= b for a, b in zip(fractions, fractions[1:])):
         raise ParameterError(f"horizons = {horizons!r}: give increasing fractions of the record in (0, 1] ending at 1, "
-                             "e.g. (0.25, 0.5, 1.0), or (1.0,) for one solve on the whole record")
+                             "e.g. (0.0625, 0.125, 0.25, 0.5, 1.0), or (1.0,) for one solve on the whole record")
     theta = problem.start
     try:
         start_rms = float(np.sqrt(np.mean(problem.residuals(theta) ** 2)))
@@ -262,6 +268,11 @@ def solve(problem: FitProblem, *, bounds=None, horizons=(0.25, 0.5, 1.0), max_nf
         N = int(np.searchsorted(t, t[0] + frac * (t[-1] - t[0]), side="right")) if frac < 1 else len(t)
         if problem.used[:N].sum() <= 2 * p and frac < 1:
             continue  # too short a part to say anything; the next horizon starts from the same values
+
+        try:
+            problem.residuals(theta, N)
+        except RunFailed:  # the last horizon's estimate cannot be run over this one: start again from the start
+            theta = problem.start
 
         def fun(th, N=N):
             try:
@@ -299,7 +310,7 @@ def _bounds(problem: FitProblem, bounds) -> tuple[np.ndarray, np.ndarray]:
 
 
 def fit(system: System, times, observed: dict, free, *, pars=None, state=None, sigma=None, bounds=None,
-        weights=None, t0: float | None = None, horizons=(0.25, 0.5, 1.0), tol: float = 1e-12, max_nfev: int = 200,
+        weights=None, t0: float | None = None, horizons=HORIZONS, tol: float = 1e-12, max_nfev: int = 200,
         identifiability_tol: float = 1e-6):
     """Fit ``free`` (names of runtime parameters and/or initial states) of ``system`` to ``observed`` {state or
     observable name: values at ``times``} (NaN: missing) from the start ``pars`` and ``state`` (the state at ``t0``,
