@@ -8,31 +8,37 @@ import numpy as np
 import xarray as xr
 from matplotlib.colors import BoundaryNorm, ListedColormap
 
-from .labels import axis_label, is_tippedisk, unit
+from .labels import axis_label, is_tippedisk, symbol, unit
 from .registry import figure
 
-LABEL_COLOURS = {"undecided": "0.6", "left_grid": "0.3", "failed": "black", "diverged": "tab:brown",
-                 "fell": "tab:red", "lift_off": "tab:pink"}
-KIND_COLOURS = {"equilibrium": ["tab:green", "darkgreen", "limegreen", "seagreen"], "wobbling": ["olive", "yellowgreen"],
-                "rolling": ["tab:orange", "darkorange"], "periodic": ["tab:purple", "indigo"],
-                "irregular": ["tab:brown", "sienna"]}
+LABEL_COLOURS = {"undecided": "0.75", "left_grid": "0.45", "failed": "black", "diverged": "#8c564b",
+                 "fell": "#d62728", "lift_off": "#e377c2"}
+# categorical colours of attractors, none a shade of another or of a label's: a kind's own first, then the rest
+ATTRACTOR_PALETTE = ("#1f77b4", "#ff7f0e", "#9467bd", "#2ca02c", "#17becf", "#bcbd22", "#393b79", "#f7b6d2")
+KIND_FIRST = {"equilibrium": "#1f77b4", "rolling": "#ff7f0e", "wobbling": "#9467bd", "periodic": "#2ca02c",
+              "irregular": "#17becf"}
 
 
 def _classes(ds: xr.Dataset):
-    """(values, names, colours) of the outcome flags."""
+    """(values, names, colours) of the outcome flags: a distinct colour per attractor and label."""
     values = [int(v) for v in ds["outcome"].attrs["flag_values"]]
     names = ds["outcome"].attrs["flag_meanings"].split()
-    used: dict[str, int] = {}
-    colours = []
-    for name in names:
-        if name in LABEL_COLOURS:
-            colours.append(LABEL_COLOURS[name])
-            continue
-        kind = name.split("_")[1] if "_" in name else name
-        options = KIND_COLOURS.get(kind, ["tab:blue", "tab:cyan"])
-        colours.append(options[used.get(kind, 0) % len(options)])
-        used[kind] = used.get(kind, 0) + 1
+    colours = [LABEL_COLOURS.get(name) for name in names]
+    free = [c for c in ATTRACTOR_PALETTE]
+    for i, name in enumerate(names):  # each kind's first attractor takes the kind's colour
+        first = KIND_FIRST.get(name.split("_")[1] if "_" in name else name)
+        if colours[i] is None and first in free:
+            colours[i] = first
+            free.remove(first)
+    for i in range(len(names)):
+        if colours[i] is None:
+            colours[i] = free.pop(0) if free else "#7f7f7f"
     return values, names, colours
+
+
+def _readable(name: str) -> str:
+    """A flag as a legend reads it: A2_equilibrium_inverted -> A2 equilibrium inverted, lift_off -> lift-off."""
+    return name.replace("lift_off", "lift-off").replace("left_grid", "left the grid").replace("_", " ")
 
 
 def _class_map(ax, fig, ds: xr.Dataset, da: xr.DataArray, x: str, y: str, title: str):
@@ -49,21 +55,21 @@ def _class_map(ax, fig, ds: xr.Dataset, da: xr.DataArray, x: str, y: str, title:
     mesh = ax.pcolormesh(ds[x], ds[y], np.asarray(coded).T if da.dims[0] == x else np.asarray(coded),
                          cmap=cmap, norm=norm, shading="nearest")
     cbar = fig.colorbar(mesh, ax=ax, ticks=np.arange(len(values)))
-    cbar.ax.set_yticklabels(names, fontsize=7)
+    cbar.ax.set_yticklabels([_readable(n) for n in names], fontsize=10)
     physical = is_tippedisk(ds)
     ax.set(xlabel=axis_label(x, ds[x].attrs.get("units", ""), physical),
            ylabel=axis_label(y, ds[y].attrs.get("units", ""), physical), title=title)
 
 
 def _panels(ds: xr.Dataset):
-    """A figure with two panels above a text row holding the table of attractors."""
+    """A figure with two stacked panels above a text row holding the table of attractors."""
     n = max(ds.sizes.get("attractor", 0), 1)
-    fig = plt.figure(figsize=(12, 4.8 + 0.18 * n), constrained_layout=True)
-    gs = fig.add_gridspec(2, 2, height_ratios=[4.6, 0.25 + 0.18 * n])
-    axes = [fig.add_subplot(gs[0, 0]), fig.add_subplot(gs[0, 1])]
-    text = fig.add_subplot(gs[1, :])
+    fig = plt.figure(figsize=(8, 8.6 + 0.22 * n), constrained_layout=True)
+    gs = fig.add_gridspec(3, 1, height_ratios=[4, 4, 0.3 + 0.22 * n])
+    axes = [fig.add_subplot(gs[0]), fig.add_subplot(gs[1])]
+    text = fig.add_subplot(gs[2])
     text.axis("off")
-    text.text(0.0, 1.0, _table_text(ds), fontsize=8, va="top", family="monospace", transform=text.transAxes)
+    text.text(0.0, 1.0, _table_text(ds), fontsize=10, va="top", transform=text.transAxes)
     return fig, axes
 
 
@@ -81,15 +87,28 @@ def _table_text(ds: xr.Dataset) -> str:
                 text += f", period {float(a['attractor_period']):.6g}, amplitude {float(a['attractor_amplitude']):.3g}"
         elif kind == "equilibrium":
             text += (f" {'inverted' if int(a['attractor_branch']) > 0 else 'noninverted'}, stable segment "
-                     f"Omega in [{float(a['attractor_segment_min']):.2f}, {float(a['attractor_segment_max']):.2f}]")
+                     rf"$\Omega$ in [{float(a['attractor_segment_min']):.2f}, {float(a['attractor_segment_max']):.2f}]"
+                     " rad/s")
         else:
-            text += (f", alpha_dot ~ {float(a['attractor_omega']):.1f} rad/s, energy drift "
-                     f"{float(a['attractor_energy_drift']):.1e}/s" + (" (transient)" if kind in ("wobbling", "rolling")
-                                                                      else ""))
+            text += (rf", $\dot\alpha \approx$ {float(a['attractor_omega']):.1f} rad/s, energy drift "
+                     f"{_power(float(a['attractor_energy_drift']))} 1/s"
+                     + (" (transient)" if kind in ("wobbling", "rolling") else ""))
             if float(a["attractor_period"]) > 0:
                 text += f", period {float(a['attractor_period']):.3g} s"
         lines.append(text)
     return "\n".join(lines)
+
+
+def _power(value: float) -> str:
+    """-3.8e-03 -> "$-3.8 \\cdot 10^{-3}$"."""
+    mantissa, exponent = f"{value:.1e}".split("e")
+    return rf"${mantissa} \cdot 10^{{{int(exponent)}}}$"
+
+
+def _fixed(text: str) -> str:
+    """A dataset's "omega=40, eps=0.1" with symbols: "$\\Omega$ = 40, $\\varepsilon$ = 0.1"."""
+    parts = [p.split("=", 1) for p in str(text).split(",") if "=" in p]
+    return ", ".join(f"{symbol(k.strip())} = {v.strip()}" for k, v in parts) or str(text)
 
 
 def _assignment_label(ds: xr.Dataset) -> str:
@@ -119,9 +138,10 @@ def basins_figure(ds: xr.Dataset):
     if "system" in ds.attrs:  # any System
         fig.suptitle(f"Basins of {ds.attrs['system']} ({ds.attrs.get('system_parameters', '')})\n{fracs}", fontsize=10)
         return fig
-    fig.suptitle(f"Basins, {ds.attrs.get('paper_model', '')}, eps = {ds.attrs.get('eps', float('nan')):g} m/s, "
-                 f"mu = {ds.attrs.get('mu', float('nan')):g}, horizon {ds.attrs.get('t_end', '')} s "
-                 f"({ds.attrs.get('fixed_initial', '')})\n{fracs}", fontsize=10)
+    fig.suptitle(f"Basins, {ds.attrs.get('paper_model', '')}, "
+                 rf"$\varepsilon$ = {ds.attrs.get('eps', float('nan')):g} m/s, "
+                 rf"$\mu$ = {ds.attrs.get('mu', float('nan')):g}, horizon {ds.attrs.get('t_end', '')} s "
+                 f"({_fixed(ds.attrs.get('fixed_initial', ''))})\n{fracs}", fontsize=11)
     return fig
 
 
@@ -142,23 +162,24 @@ def basin_fractions_figure(ds: xr.Dataset):
             layers.append(share)
             labels.append(name)
             cols.append(c)
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.6), constrained_layout=True)
+    fig, axes = plt.subplots(2, 1, figsize=(8, 8.4), sharex=True, constrained_layout=True)
     if layers:
-        axes[0].stackplot(x, *layers, labels=labels, colors=cols, alpha=0.9)
-    axes[0].set(xlabel=f"{par} [{ds[par].attrs.get('units', '')}]", ylabel="share of sampled initial conditions",
-                ylim=(0, 1), title="basin fractions (attractors matched across " + par + ")")
-    axes[0].legend(fontsize=7, loc="upper left")
-    axes[1].plot(x, ds["inverted_fraction"], "o-", color="tab:green", label="stable inverted spin (attractor)")
+        axes[0].stackplot(x, *layers, labels=[_readable(n) for n in labels], colors=cols, alpha=0.9)
+    xlabel = axis_label(par, ds[par].attrs.get("units", ""), is_tippedisk(ds))
+    axes[0].set(ylabel="share of sampled starts", ylim=(0, 1),
+                title=f"basin fractions (attractors matched across {symbol(par)})")
+    axes[0].legend(fontsize=10, loc="center left", bbox_to_anchor=(1.01, 0.5))
+    axes[1].plot(x, ds["inverted_fraction"], "o-", color=KIND_FIRST["equilibrium"],
+                 label="stable inverted spin (attractor)")
     wob = [v for v, n in zip(values, names) if v >= 0 and "wobbling_inverted" in n]
     if wob:
         transient = ds["basin_fraction"].sel(attractor=wob).sum("attractor")
-        axes[1].plot(x, ds["inverted_fraction"] + transient, "s--", color="olive",
-                     label="+ wobbling about the inverted spin (transient)")
-    axes[1].set(xlabel=axes[0].get_xlabel(), ylabel="share", ylim=(-0.02, 1.02),
-                title="share of initial conditions that invert")
-    axes[1].legend(fontsize=8)
-    fig.suptitle(f"Basin fractions vs {par}, {ds.sizes['sample']} samples per value, horizon "
-                 f"{ds.attrs.get('t_end', '')} s", fontsize=10)
+        axes[1].plot(x, ds["inverted_fraction"] + transient, "s--", color=KIND_FIRST["wobbling"],
+                     label="+ wobbling about the inverted spin\n(transient)")
+    axes[1].set(xlabel=xlabel, ylabel="share", ylim=(-0.02, 1.02), title="share of starts that invert")
+    axes[1].legend(fontsize=10, loc="center left", bbox_to_anchor=(1.01, 0.5))
+    fig.suptitle(f"Basin fractions over {symbol(par)}, {ds.sizes['sample']} samples per value, horizon "
+                 f"{ds.attrs.get('t_end', '')} s", fontsize=11)
     return fig
 
 
@@ -173,7 +194,7 @@ def attractor_outcome_map_figure(ds: xr.Dataset):
     mesh = axes[1].pcolormesh(ds[x], ds[y], sub["assignment_time"].transpose(y, x), shading="nearest", cmap="viridis")
     fig.colorbar(mesh, ax=axes[1], label="time to assignment [s]")
     axes[1].set(xlabel=axes[0].get_xlabel(), ylabel=axes[0].get_ylabel(), title="time to decision")
-    extra = ", ".join(f"{d} = {float(ds[d][0]):g}" for d in dims[2:])
+    extra = ", ".join(f"{symbol(d)} = {float(ds[d][0]):g}" for d in dims[2:])
     fig.suptitle(f"Outcome map by attractors, {ds.attrs.get('paper_model', '')}, horizon {ds.attrs.get('t_end', '')} s"
-                 + (f" ({extra})" if extra else ""), fontsize=10)
+                 + (f" ({extra})" if extra else ""), fontsize=11)
     return fig

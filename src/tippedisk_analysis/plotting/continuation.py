@@ -66,7 +66,7 @@ def continuation_figure(ds: xr.Dataset, observable: str | None = None, backgroun
         for a, yy in ((ax, y[index]), (ax2, 0.0)):
             a.plot(x[index], yy, "o", color="tab:red", ms=5, zorder=3)
         ax.annotate(label, (x[index], y[index]), textcoords="offset points", xytext=(0, 8 + 11 * (k % 3)),
-                    ha="center", fontsize=8, color="tab:red",
+                    ha="center", fontsize=10, color="tab:red",
                     arrowprops={"arrowstyle": "-", "color": "tab:red", "lw": 0.5})
     fig.suptitle(_fixed_text(ds, parameters))
     return fig
@@ -77,8 +77,10 @@ def _fixed_text(ds: xr.Dataset, parameters) -> str:
     names = ds.attrs.get("parameter_names", "omega eps mu e inertia").split()
     fixed = [n for n in names if n not in parameters and n in ds]
     system = ds.attrs.get("system", "")
-    return f"Continuation{' of ' + system if system else ''}, " + ", ".join(
-        f"{n} = {float(ds[n].values[0]):.4g}" for n in fixed)
+    physical = labels.is_tippedisk(ds)
+    values = [f"{labels.symbol(n) if physical else n} = {float(ds[n].values[0]):.4g}" for n in fixed]
+    lines = [", ".join(values[i:i + 5]) for i in range(0, len(values), 5)]  # five to a line: fits the figure
+    return "\n".join([f"Continuation{' of ' + system if system else ''}", *lines])
 
 
 def curve_figure(curves: list, background=None, ax=None):
@@ -93,7 +95,7 @@ def curve_figure(curves: list, background=None, ax=None):
     if background is not None:
         branch = config_of(curves[0]).get("branch", "inverted")
         mre = background["max_real_eig"].sel(branch=branch).transpose("eps", "omega").values
-        ax.contourf(background["omega"], background["eps"], mre, levels=[-1e9, 0.0], colors=["#cfe3f5"])
+        ax.contourf(background["omega"], background["eps"], mre, levels=[-1e9, 0.0], colors=["#8fbfe0"])
         ax.contour(background["omega"], background["eps"], mre, levels=[0.0], colors="0.5", linewidths=0.6)
     for ds in curves:
         x, y = ds[parameters[0]].values, ds[parameters[1]].values
@@ -107,11 +109,11 @@ def curve_figure(curves: list, background=None, ax=None):
             color, labelled = line.get_color(), labelled or label is not None
         for label, index in _specials(ds):
             ax.plot(x[index], y[index], "s", color="k", ms=5)
-            ax.annotate(label, (x[index], y[index]), textcoords="offset points", xytext=(5, 4), fontsize=8)
+            ax.annotate(label, (x[index], y[index]), textcoords="offset points", xytext=(5, 4), fontsize=11)
     ax.set(xlabel=axis_label(parameters[0], curves[0]), ylabel=axis_label(parameters[1], curves[0]),
            title="Hopf (solid), zero-eigenvalue (dashed), neutral saddle (dotted)" + (
-               "; shaded: stable" if background is not None else ""))
-    ax.legend(fontsize=8, loc="best")
+               "\nshaded blue: stable" if background is not None else ""))
+    ax.legend(fontsize=10, loc="best")
     if own:
         finite = np.concatenate([np.c_[d[parameters[0]].values, d[parameters[1]].values] for d in curves])
         low, high = np.nanmin(finite[:, 0]), np.nanmax(finite[:, 0])

@@ -3,6 +3,8 @@ branches drawn stable solid, marginal dotted, unstable dashed."""
 
 from __future__ import annotations
 
+import re
+
 # name: label without the unit
 NAMES = {
     "omega": r"spin rate $\Omega$",
@@ -11,6 +13,7 @@ NAMES = {
     "mu": r"friction coefficient $\mu$",
     "e": "eccentricity $e$",
     "dgamma0": r"initial perturbation $\Delta\gamma_0$",
+    "beta0": r"initial tilt $\beta_0$",
     "alpha": r"$\alpha$",
     "beta": r"$\beta$",
     "gamma": r"$\gamma$",
@@ -31,13 +34,30 @@ NAMES = {
     "omega_z": r"$\omega_z$",
 }
 
-UNITS = {"rad s-1": "rad/s", "m s-1": "m/s", "s-1": "1/s", "m s-2": "m/s^2", "rad s-2": "rad/s^2", "1": "-",
-         "kg m2": "kg m^2"}
+UNITS = {"rad s-1": "rad/s", "m s-1": "m/s", "s-1": "1/s", "m s-2": r"m/s$^2$", "rad s-2": r"rad/s$^2$", "1": "-",
+         "kg m2": r"kg m$^2$"}
+ENDED_WELL = ("completed", "converged")  # statuses a figure's title leaves unsaid
 
 
 def unit(units: str) -> str:
     """CF units as written in the figures: rad s-1 -> rad/s, 1 -> -."""
     return UNITS.get(units.strip(), units.strip())
+
+
+def symbol(name: str) -> str:
+    """The mathtext symbol of a quantity, e.g. symbol("eps") -> "$\\varepsilon$"; a name without one as it is."""
+    found = re.findall(r"\$[^$]+\$", NAMES.get(name, ""))
+    return found[-1] if found else name
+
+
+def with_symbols(text: str) -> str:
+    """Names of quantities in a text (a section "beta_dot=0") as their symbols ("$\\dot\\beta$=0")."""
+    return re.sub(r"[A-Za-z_]\w*", lambda m: symbol(m.group(0)) if m.group(0) in NAMES else m.group(0), str(text))
+
+
+def ending(status: str) -> str:
+    """What a title says of a run's status: nothing when it ended well, else ", STATUS"."""
+    return "" if not status or status in ENDED_WELL else f", {status}"
 
 
 def is_tippedisk(ds) -> bool:

@@ -11,7 +11,7 @@ from matplotlib.colors import TwoSlopeNorm
 
 from ..results import config_of
 from .labels import STABILITY_STYLE as STYLE
-from .labels import runs
+from .labels import ending, runs
 from .registry import figure
 
 STATUS_TEXT = {0: "orbit", 1: "equilibrium", 2: "not converged", 3: "non-finite"}
@@ -143,7 +143,7 @@ def lyapunov_figure(ds: xr.Dataset):
     ax.set_yscale("symlog", linthresh=0.1)
     ax.set_xscale("log")
     ax.set(xlabel="time since the transient", ylabel="running estimate",
-           title=f"Lyapunov spectrum of {ds.attrs.get('system', '')} ({ds.attrs.get('status', '')})")
+           title=f"Lyapunov spectrum of {ds.attrs.get('system', '')}{ending(ds.attrs.get('status', ''))}")
     ax.legend(fontsize=7)
     return fig
 
@@ -156,7 +156,7 @@ def _map_figure(ds: xr.Dataset):
     span = np.nanmax(np.abs(shown)) if np.isfinite(shown).any() else 1.0
     mesh = ax.pcolormesh(ds.omega, ds.eps, shown, cmap="RdBu_r", norm=TwoSlopeNorm(0.0, -span, span),
                          shading="nearest")
-    plt.colorbar(mesh, ax=ax, label="largest Lyapunov exponent [1/s] (completed runs)")
+    plt.colorbar(mesh, ax=ax, label=r"largest Lyapunov exponent $\lambda_1$ [1/s]")
     flagged = np.where(~ok, 1.0, np.nan)
     if np.isfinite(flagged).any():
         ax.pcolor(ds.omega, ds.eps, flagged, hatch="xx", alpha=0.0, shading="nearest")

@@ -19,6 +19,7 @@ import xarray as xr
 from ..errors import DatasetError
 from ..kinematics import rotation_from_euler
 from ..results import config_of
+from .labels import ending
 from .registry import figure
 
 TIME_LABEL = "time t [s]"
@@ -137,9 +138,9 @@ def simulation_figure(ds: xr.Dataset, companion: xr.Dataset | None = None, angle
     if "mode" in ds:
         shade_sliding(axes.ravel(), ds)
     if title is None:
-        title = f"{main} ({ds.attrs.get('model', '')}): {ds.attrs.get('status', '')}"
+        title = f"{main} ({ds.attrs.get('model', '')}{ending(ds.attrs.get('status', ''))})"
         if companion is not None:
-            title += f"; {comp} ({companion.attrs.get('model', '')}): {companion.attrs.get('status', '')}"
+            title += f"; {comp} ({companion.attrs.get('model', '')}{ending(companion.attrs.get('status', ''))})"
     fig.suptitle(title, fontsize=10)
     return fig
 

@@ -8,7 +8,7 @@ import xarray as xr
 from matplotlib.colors import SymLogNorm
 
 from ..analysis.maps import critical_speed_curves
-from .labels import axis_label
+from .labels import axis_label, symbol
 from .registry import figure
 
 
@@ -20,7 +20,7 @@ def stability_map_figure(ds: xr.Dataset, eps_index: int | None = None):
     are shown at their first value."""
     extra = {d: 0 for d in ds["max_real_eig"].dims if d not in ("branch", "omega", "eps")}
     sub = ds.isel(extra) if extra else ds
-    fixed = ", ".join(f"{d} = {float(sub[d]):g}" for d in extra)
+    fixed = ", ".join(f"{symbol(d)} = {float(sub[d]):g}" for d in extra)
     curves = critical_speed_curves(sub)
     omega, eps = sub["omega"].values, sub["eps"].values
     if eps_index is None:  # the eps with the most critical speeds (else the middle one)
@@ -61,8 +61,8 @@ def stability_map_figure(ds: xr.Dataset, eps_index: int | None = None):
         ax.set_yscale("symlog", linthresh=0.1)
         ax.set(xlabel=axis_label("omega", "rad s-1"), ylabel=r"Re $s_k$ [1/s]",
                title=rf"{branch}: eigenvalue real parts at $\varepsilon$ = {eps[k]:g} m/s")
-    fig.legend(handles=_legend_handles(len(omega) > 1 and len(eps) > 1), loc="outside lower center", ncol=4,
-               fontsize=8, frameon=False)
+    fig.legend(handles=_legend_handles(len(omega) > 1 and len(eps) > 1), loc="outside lower center", ncol=2,
+               fontsize=11, frameon=False)
     fig.suptitle("Stationary spinning solutions, ODE Model 1 reduced" + (f" ({fixed})" if fixed else ""))
     return fig
 

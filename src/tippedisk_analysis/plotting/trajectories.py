@@ -8,7 +8,7 @@ import xarray as xr
 from matplotlib.colors import BoundaryNorm, ListedColormap
 
 from .attractors import attractor_outcome_map_figure
-from .labels import axis_label
+from .labels import axis_label, ending, symbol, with_symbols
 from .registry import figure
 
 
@@ -26,8 +26,8 @@ def poincare_figure(ds: xr.Dataset):
         ax.set(xlabel=axis_label(x, ds[x].attrs.get("units", "")), ylabel=axis_label(y, ds[y].attrs.get("units", "")))
         _no_round_off_zoom(ax, ds[x].values, ds[y].values)
     fig.colorbar(sc, ax=axes, label=axis_label("time", ds["time"].attrs.get("units", "s")))
-    fig.suptitle(f"Poincaré section {ds.attrs.get('section', '')} ({ds.attrs.get('direction', '')}): "
-                 f"{ds.attrs.get('n_crossings', 0)} crossings, {ds.attrs.get('status', '')}")
+    fig.suptitle(f"Poincaré section {with_symbols(ds.attrs.get('section', ''))} ({ds.attrs.get('direction', '')}): "
+                 f"{ds.attrs.get('n_crossings', 0)} crossings{ending(ds.attrs.get('status', ''))}")
     return fig
 
 
@@ -59,11 +59,11 @@ def outcome_map_figure(ds: xr.Dataset):
                "failed": "black", "rolling": "tab:orange"}
     cmap = ListedColormap([palette.get(m, "tab:purple") for m in meanings])
     norm = BoundaryNorm([v - 0.5 for v in values] + [values[-1] + 0.5], cmap.N)
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), constrained_layout=True)
+    fig, axes = plt.subplots(2, 1, figsize=(7.5, 8.5), constrained_layout=True)
     x, y = dims[0], dims[1]
     mesh = axes[0].pcolormesh(ds[x], ds[y], out.transpose(y, x), cmap=cmap, norm=norm, shading="nearest")
     cbar = fig.colorbar(mesh, ax=axes[0], ticks=values)
-    cbar.ax.set_yticklabels(meanings)
+    cbar.ax.set_yticklabels([m.replace("_", " ") for m in meanings])
     t_inv = ds["inversion_time"].isel(sel)
     masked = t_inv.where(t_inv >= 0)  # fill value -1: no inversion (figure only)
     mesh = axes[1].pcolormesh(ds[x], ds[y], masked.transpose(y, x), shading="nearest", cmap="magma")
@@ -71,7 +71,7 @@ def outcome_map_figure(ds: xr.Dataset):
     for ax, title in zip(axes, ("outcome", r"first upward crossing of $\gamma$ = 0")):
         ax.set(xlabel=axis_label(x, ds[x].attrs.get("units", "")), ylabel=axis_label(y, ds[y].attrs.get("units", "")),
                title=title)
-    extra = ", ".join(f"{d} = {float(ds[d][0]):g}" for d in dims[2:])
+    extra = ", ".join(f"{symbol(d)} = {float(ds[d][0]):g}" for d in dims[2:])
     fig.suptitle(f"Outcome map, {ds.attrs.get('paper_model', '')}, runs of {ds.attrs.get('t_end', '')} s"
                  + (f" ({extra})" if extra else ""))
     return fig
