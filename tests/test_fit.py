@@ -181,3 +181,40 @@ def test_two_sigma_intervals_cover_the_truth_in_about_95_percent():
         assert ds.attrs["status"] == "completed", ds.attrs["message"]
         hits += np.abs(ds.estimate.values - [TRUE["c"], TRUE["k"], TRUE["x"]]) < 2 * ds.stderr.values
     assert np.all((hits >= 34) & (hits <= 40)), hits
+
+
+@pytest.fixture(scope="module")
+def table3_record():
+    """Table 3's inversion over 2 s, gamma and beta at 100 Hz, from scipy's DOP853 on the ODE Euler model's
+    right-hand side (1e-11), plus noise 0.01 rad."""
+    from tippedisk_analysis.models import ode
+    from tippedisk_analysis.parameters import InitialState, Setup
+
+    system = ode.as_system(ode.EULER)
+    pars = ode.parameter_vector(Setup())
+    x0 = ode.initial_state_vector(ode.EULER, Setup(), InitialState())
+    t = np.arange(0, 201) * 0.01
+    sol = solve_ivp(lambda _t, x: system.f(x, pars), (0, 2.0), x0, t_eval=t, method="DOP853", rtol=1e-11,
+                    atol=1e-11)
+    rng = np.random.default_rng(7)
+    angles = {k: sol.y[system.state_index(k)] for k in ("gamma", "beta")}
+    return t, angles, {k: v + 0.01 * rng.normal(size=t.size) for k, v in angles.items()}
+
+
+@pytest.mark.slow  # the disk's variational integrator compiles for ~30 s on first use on a machine
+def test_disk_recovers_mu_and_eps_from_a_camera_record(table3_record):
+    from tippedisk_analysis.parameters import Friction, Setup
+
+    t, exact, noisy = table3_record
+    ds = td.fit(t, noisy, ["mu", "eps"], setup=Setup(friction=Friction(mu=0.25, eps=0.15)))
+    assert ds.attrs["status"] == "completed", ds.attrs["message"]
+    assert np.all(np.abs(ds.estimate.values - [0.3, 0.1]) < 2 * ds.stderr.values), (ds.estimate.values,
+                                                                                       ds.stderr.values)
+    assert np.max(np.abs(ds.gamma.values - exact["gamma"])) < 0.01
+    assert ds.attrs["model"] == "ode-euler" and '"mu": 0.25' in ds.attrs["start_setup"]
+    check_finite(ds)
+
+
+def test_disk_models_without_sensitivities_are_refused():
+    with pytest.raises(ParameterError, match="cannot be fitted: a fit needs the variational equations"):
+        td.fit(np.linspace(0, 1, 11), {"beta": np.ones(11)}, ["mu"], model="m6")

@@ -15,7 +15,7 @@ from .errors import DatasetError, IntegrationError, ParameterError, TippediskErr
 from .version import __version__
 
 _LAZY = {"Disk": "parameters", "Friction": "parameters", "InitialState": "parameters", "Setup": "parameters",
-         "load": "results", "save": "results", "model_names": "solvers", "simulate": "solvers"}
+         "load": "results", "save": "results", "model_names": "solvers", "simulate": "solvers", "fit": "analysis.fit"}
 
 __all__ = [
     "DatasetError", "Disk", "Friction", "InitialState", "IntegrationError", "ParameterError", "Setup",
