@@ -218,3 +218,44 @@ def test_disk_recovers_mu_and_eps_from_a_camera_record(table3_record):
 def test_disk_models_without_sensitivities_are_refused():
     with pytest.raises(ParameterError, match="cannot be fitted: a fit needs the variational equations"):
         td.fit(np.linspace(0, 1, 11), {"beta": np.ones(11)}, ["mu"], model="m6")
+
+
+def _write_csv(path, header, rows):
+    path.write_text(header + "\n" + "\n".join(",".join(map(str, r)) for r in rows) + "\n")
+    return path
+
+
+@pytest.mark.slow  # the disk's variational integrator compiles on first use on a machine
+def test_cli_fit_json_is_the_only_stdout(table3_record, tmp_path, capsys):
+    from tippedisk_analysis.cli import main
+
+    t, _exact, noisy = table3_record
+    data = _write_csv(tmp_path / "record.csv", "time,gamma,beta", zip(t, noisy["gamma"], noisy["beta"]))
+    code = main(["fit", str(data), "--free", "mu,eps", "--mu", "0.25", "--eps", "0.15", "-o", str(tmp_path / "f.nc"),
+                 "--json"])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    values = __import__("json").loads(out)
+    assert set(values) == {"mu", "eps"}
+    for name, truth in (("mu", 0.3), ("eps", 0.1)):
+        assert abs(values[name]["value"] - truth) < 2 * values[name]["stderr"]
+    assert "fit of ode-euler completed" in err and td.load(tmp_path / "f.nc").attrs["kind"] == "fit"
+
+
+@pytest.mark.parametrize("header, rows, extra, match", [
+    ("time,beta", [(0, 1), (0.2, 1), (0.1, 1), (0.3, 1)], [], "times goes back at sample 2"),
+    ("time,beta", [(0, 1), (0.1, 1), (0.1, 1), (0.3, 1)], [], "times repeats at sample 2"),
+    ("time,theta", [(0, 1), (0.1, 1), (0.2, 1), (0.3, 1)], [], "no state or observable 'theta'"),
+    ("time,beta,gamma", [(0, 1, ""), (0.1, 1, ""), (0.2, 1, ""), (0.3, 1, "")], [], "'gamma' holds no finite value"),
+    ("time,beta", [(0, 1), (0.1, 1)], [], "2 observed samples for 2 free values"),
+    ("time,beta", [(0, 1), (0.1, 1), (0.2, 1)], ["--model", "m6"], "--model m6 cannot be fitted"),
+    ("frame,beta", [(0, 1), (1, 1), (2, 1)], [], "no column 'time'"),
+])
+def test_cli_bad_data_is_one_line_and_exit_2(tmp_path, capsys, header, rows, extra, match):
+    from tippedisk_analysis.cli import main
+
+    data = _write_csv(tmp_path / "record.csv", header, rows)
+    code = main(["fit", str(data), "--free", "mu,eps", "-o", str(tmp_path / "f.nc"), *extra])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1 and match in err, err
+    assert not (tmp_path / "f.nc").exists()

@@ -21,7 +21,7 @@ import warnings
 
 from ..errors import TippediskError, TippediskWarning
 from ..version import __version__
-from . import (animate, basins, bifurcation, continuation, critical_spin, lyapunov, outcome_map,  # noqa: F401
+from . import (animate, basins, bifurcation, continuation, critical_spin, fit, lyapunov, outcome_map,  # noqa: F401
                periodic_orbits, plot, poincare, simulate, stability_map, study)  # registration
 from .registry import COMMANDS
 
