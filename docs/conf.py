@@ -193,6 +193,26 @@ def _quiet_kernels() -> None:
     os.environ["IPYTHONDIR"] = str(profile.parent)
 
 
+def _link_images(app, doctree, docname) -> None:
+    """Every image links to its full-size file: Sphinx links only the images it scales (``:width:``), which left
+    the tutorials' outputs and the images of markdown tables without one."""
+    if app.builder.format != "html":
+        return
+    from docutils import nodes
+    from sphinx.util.osutil import relative_uri
+
+    images = relative_uri(app.builder.get_target_uri(docname), "_images")
+    for node in list(doctree.findall(nodes.image)):
+        stored = app.env.images.get(node["uri"])
+        if isinstance(node.parent, nodes.reference) or stored is None or any(
+                key in node for key in ("scale", "width", "height")):
+            continue  # already a link, a remote image, or one Sphinx links itself
+        link = nodes.reference("", "", internal=True, refuri=f"{images}/{stored[1]}")
+        node.replace_self(link)
+        link.append(node)
+
+
 def setup(app):
     _quiet_kernels()
     app.connect("config-inited", _generate)
+    app.connect("doctree-resolved", _link_images)

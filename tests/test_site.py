@@ -24,6 +24,9 @@ MAX_WORDS = 4000
 
 # Pages exempt from the checks of the published text (none: every page is cleaned)
 PENDING: set[str] = set()
+# Pages of results, each shown with at least one figure (built page names; the inversion's topic pages by prefix)
+ANALYSIS_PAGES = re.compile(r"^(stability|continuation|periodic_orbits|periodic_orbits_tippedisk|dynamics|attractors"
+                            r"|trajectories|rolling|inversion(_\w+)?)\.html$")
 # Reference generated from the code (docstrings, argparse) and the changelog are not prose pages for the length
 LENGTH_EXEMPT = re.compile(r"^(_generated/|changelog\.html$|genindex\.html$|search\.html$|py-modindex\.html$)")
 
@@ -134,3 +137,22 @@ def test_the_site_renders_math_titles_and_tutorial_figures(site):
     tutorials = sorted((site / "tutorials").glob("*.html"))
     assert len(tutorials) == len(list((DOCS / "tutorials").glob("*.md")))
     assert not [p.name for p in tutorials if "<img" not in p.read_text()]
+
+
+def test_every_analysis_page_shows_a_figure(site):
+    found = [name for name in pages(site) if ANALYSIS_PAGES.match(name)]
+    assert len(found) >= 15, found
+    assert not [name for name in found if "<img" not in pages(site)[name]]
+
+
+def test_every_image_links_to_its_full_size_file(site):
+    """A plain <a href> to the image's own file around each <img>: a reader enlarges a figure by a click."""
+    unlinked = {}
+    for name, body in pages(site).items():
+        folder = (site / name).parent
+        for match in re.finditer(r'<img\b[^>]*\bsrc="([^"]+)"', body):
+            link = re.search(r'<a\b[^>]*\bhref="([^"#]+)"[^>]*>\s*$', body[:match.start()])
+            if not link or link.group(1) != match.group(1) or not (folder / link.group(1)).is_file():
+                unlinked.setdefault(name, []).append(match.group(1))
+    assert not unlinked, unlinked
+

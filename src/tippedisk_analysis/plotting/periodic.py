@@ -11,7 +11,7 @@ from matplotlib.colors import TwoSlopeNorm
 
 from ..results import config_of
 from .labels import STABILITY_STYLE as STYLE
-from .labels import ending, runs
+from .labels import axis_label, ending, is_tippedisk, runs, symbol
 from .registry import figure
 
 STATUS_TEXT = {0: "orbit", 1: "equilibrium", 2: "not converged", 3: "non-finite"}
@@ -41,10 +41,11 @@ def _multipliers(ax, ds: xr.Dataset, color_by=None) -> None:
     ax.plot(re[trivial], im[trivial], "x", color="0.4", ms=5, label="trivial")
     lim = max(1.3, min(np.abs(np.concatenate([re.ravel(), im.ravel()])).max() * 1.1, 4.0))
     largest = float(np.hypot(re, im)[~trivial].max(initial=0.0))
-    ax.set(xlim=(-lim, lim), ylim=(-lim, lim), title=f"Floquet multipliers (largest |mu| {largest:.3g})")
-    ax.legend(fontsize=7, loc="lower left")
+    ax.set(xlim=(-lim, lim), ylim=(-lim, lim), title=rf"Floquet multipliers (largest $|\mu|$ {largest:.3g})")
+    ax.legend(fontsize=9, loc="lower left")
     if color_by is not None:
-        plt.colorbar(sc, ax=ax, shrink=0.7, label=ds.attrs.get("parameter", ""))
+        name = ds.attrs.get("parameter", "")
+        plt.colorbar(sc, ax=ax, orientation="horizontal", shrink=0.9, label=_label(ds, name))
 
 
 @figure("periodic_orbits")
@@ -56,8 +57,17 @@ def periodic_orbits_figure(ds: xr.Dataset):
     return _search_figure(ds)
 
 
+def _label(ds: xr.Dataset, name: str) -> str:
+    """A parameter's or state's axis label: symbols and units for the tippedisk, the declared name otherwise."""
+    units = ds[name].attrs.get("units", "") if name in ds else ""
+    return axis_label(name, units, is_tippedisk(ds))
+
+
 def _branch_figure(ds: xr.Dataset, name: str):
-    fig, axes = plt.subplots(1, 3, figsize=(14, 4.6), constrained_layout=True)
+    """The branch above its multipliers and orbits (8 in wide: readable at the width of a page)."""
+    fig = plt.figure(figsize=(8, 8.5), constrained_layout=True)
+    grid = fig.add_gridspec(2, 2, height_ratios=[1, 1.25])
+    axes = [fig.add_subplot(grid[0, :]), fig.add_subplot(grid[1, 0]), fig.add_subplot(grid[1, 1])]
     x, amp = ds[name].values, ds.amplitude.values
     ax = axes[0]
     config = config_of(ds)
@@ -70,11 +80,11 @@ def _branch_figure(ds: xr.Dataset, name: str):
     ax.plot([], [], "--", color="k", label="unstable orbits")
     for label, index in zip(ds.special_label.values, ds.special_index.values):
         ax.plot(x[index], amp[index], "o", color="tab:red", ms=5, zorder=3)
-        ax.annotate(str(label), (x[index], amp[index]), textcoords="offset points", xytext=(4, 6), fontsize=8,
+        ax.annotate(str(label), (x[index], amp[index]), textcoords="offset points", xytext=(4, 6), fontsize=10,
                     color="tab:red")
-    ax.set(xlabel=name, ylabel="amplitude max|x - mean x| (scaled)", title=f"{ds.attrs.get('system', '')}: branch of "
-                                                                           "periodic orbits")
-    ax.legend(fontsize=7)
+    ax.set(xlabel=_label(ds, name), ylabel=r"amplitude $\max|x - \bar x|$ (scaled)",
+           title=f"branch of periodic orbits of {ds.attrs.get('system', '')}")
+    ax.legend(fontsize=9)
     _multipliers(axes[1], ds, color_by=x)
     ax = axes[2]
     i, j = _state_pair(ds)
@@ -82,10 +92,11 @@ def _branch_figure(ds: xr.Dataset, name: str):
     for p in picks:
         orbit = ds.orbit.values[p]
         ax.plot(np.append(orbit[:, i], orbit[0, i]), np.append(orbit[:, j], orbit[0, j]),
-                STYLE[int(stab[p])], lw=1.0, label=f"{name} = {x[p]:.4g}, T = {float(ds.period[p]):.4g}")
+                STYLE[int(stab[p])], lw=1.0, label=f"{symbol(name) if is_tippedisk(ds) else name} = {x[p]:.4g}, "
+                                                   f"$T$ = {float(ds.period[p]):.4g}")
     states = [str(s) for s in ds["state"].values]
-    ax.set(xlabel=states[i], ylabel=states[j], title="orbits along the branch")
-    ax.legend(fontsize=6)
+    ax.set(xlabel=_label(ds, states[i]), ylabel=_label(ds, states[j]), title="orbits along the branch")
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.14))
     return fig
 
 
