@@ -27,7 +27,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
 from numba import njit
 
 SPLIT_TOL = 1e-11  # W's block below the diagonal at which two groups of multipliers separate (their relative error;
@@ -99,6 +98,32 @@ def _sweep(A, B, Z0, S, T):
         T[j] = R1.T[::-1, ::-1]
         Z = np.ascontiguousarray(Q1[:, ::-1])
     return Z
+
+
+@njit(cache=True)
+def _block_product(S, T, start, stop):
+    """(P / scale, log scale): P = prod_j (-T_j^-1 S_j) on the diagonal block [start, stop) (upper triangular
+    factors: their diagonal blocks multiply), normalised factor by factor."""
+    N = S.shape[0]
+    c = stop - start
+    P = np.eye(c)
+    log_scale = 0.0
+    for j in range(N):
+        Sb = S[j, start:stop, start:stop]
+        Tb = T[j, start:stop, start:stop]
+        R = Sb @ P
+        for col in range(c):  # back substitution: T_b X = -R
+            for row in range(c - 1, -1, -1):
+                acc = -R[row, col]
+                for k in range(row + 1, c):
+                    acc -= Tb[row, k] * R[k, col]
+                R[row, col] = acc / Tb[row, row]
+        size = np.abs(R).max()
+        if not size > 0:
+            return R, log_scale
+        P = R / size
+        log_scale += math.log(size)
+    return P, log_scale
 
 
 def _lower_norms(W: np.ndarray) -> np.ndarray:
@@ -174,14 +199,7 @@ def _spectrum(S, T, W, Z0, blocks, sweeps) -> ProductSpectrum:
             logs.append(log_mod)
             vectors.append(np.ones((1, 1), complex))
             continue
-        P, log_scale = np.eye(stop - start), 0.0
-        for j in range(N):
-            P = -scipy.linalg.solve_triangular(T[j, start:stop, start:stop], S[j, start:stop, start:stop] @ P)
-            size = np.abs(P).max()
-            if not size > 0:
-                break
-            P /= size
-            log_scale += math.log(size)
+        P, log_scale = _block_product(S, T, start, stop)
         vals, vecs = np.linalg.eig(W[start:stop, start:stop] @ P)
         with np.errstate(divide="ignore"):
             block_logs = np.log(np.abs(vals)) + log_scale
