@@ -160,6 +160,7 @@ TEXTBOOK = {
 
 @functools.lru_cache(maxsize=None)
 def textbook_system(name: str) -> System:
+    """The catalogue's System of that name (``TEXTBOOK[name].facts``: what is known of it exactly)."""
     if name not in TEXTBOOK:
         raise ParameterError(f"unknown system {name!r}; choose one of {', '.join(TEXTBOOK)}")
     return TEXTBOOK[name].build()
