@@ -64,6 +64,17 @@ API_MODULES = (
 )
 
 
+# names a module's reference page leads with (what a user calls first); the rest follow in __all__ order
+LEAD = {
+    "tippedisk_analysis.dynamics": (
+        "System", "equilibrium_branch", "special_point_curve", "orbit_branch", "hopf_branch", "find_orbit",
+        "continue_orbits", "lyapunov_spectrum", "basins", "Grid", "poincare_section", "homoclinic_point",
+        "homoclinic_scan", "homoclinic_curve", "symmetric_family", "Shooting", "family_drift", "drift_at",
+        "HybridSystem", "Guard", "Jump", "simulate_hybrid", "find_hybrid_orbit", "filippov_system",
+        "textbook_system", "Event", "branch_dataset"),
+}
+
+
 def _cli_examples() -> dict:
     """The first example of each command printed in the docs or the README (``tippedisk NAME ...``)."""
     from tippedisk_analysis.cli.registry import COMMANDS
@@ -141,16 +152,37 @@ def _api_pages() -> dict:
         lines = [f"# {title}", "", f"`{module_name}`: {summary}", ""]
         if module_name in examples:  # docs/api_examples.py (tests/test_docs.py runs each)
             lines += ["Example:", "", "```python", examples[module_name].strip(), "```", ""]
-        for name in module.__all__:
+        lead = LEAD.get(module_name, ())
+        names = [*lead, *(n for n in module.__all__ if n not in lead)]
+        names = [n for n in names if not n.startswith("__") and callable(getattr(module, n))]
+        lines += ["| name | what it does |", "|---|---|"]
+        for name in names:
             obj = getattr(module, name)
-            if name.startswith("__") or not callable(obj):
-                continue
+            target = f"{obj.__module__}.{obj.__qualname__}"
+            lines.append(f"| {{py:obj}}`{name} <{target}>` | {_cell(_first_sentence(obj))} |")
+        lines.append("")
+        for name in names:
+            obj = getattr(module, name)
             kind = "autoclass" if isinstance(obj, type) else "autofunction"
             members = ["   :members:"] if kind == "autoclass" and not issubclass(obj, Exception) else []
             lines += ["```{eval-rst}", f".. {kind}:: {obj.__module__}.{obj.__qualname__}", *members, "```", ""]
         pages[f"api/{slug}.md"] = "\n".join(lines)
     overview += ["", "```{toctree}", ":hidden:", "", *(p.removesuffix(".md") for p in pages), "```", ""]
     return {"api.md": "\n".join(overview), **pages}
+
+
+def _first_sentence(obj) -> str:
+    """The first sentence of an object's docstring, RST roles as code: its one-line description."""
+    import inspect
+
+    text = " ".join((inspect.getdoc(obj) or "").split("\n\n")[0].split())
+    text = re.sub(r":(?:class|func|mod|meth|attr|data):`~?\.?([^`]+)`", r"`\1`", text).replace("``", "`")
+    end = re.search(r"(?<!e\.g)(?<!i\.e)\.(\s|$)", text)
+    text = text[:end.start() + 1] if end else text
+    if len(text) <= 160:
+        return text
+    clause = text.find(";", 40, 160)  # the first clause when the sentence runs on
+    return text[:clause] + " ..." if clause > 0 else text[:text.rfind(" ", 0, 156)] + " ..."
 
 
 def _schema_page() -> str:
