@@ -216,12 +216,20 @@ def _generate(_app=None, _config=None) -> None:
             path.write_text(text)
 
 
+KERNEL_CONFIG = """c.IPKernelApp.log_level = "ERROR"
+c.InteractiveShellApp.exec_lines = [
+    "import warnings; warnings.filterwarnings('ignore', message=r'compiling .* \\(first use on this machine')"]
+"""
+
+
 def _quiet_kernels() -> None:
     """The tutorials' kernels log at ERROR: ipykernel warns at every start that a local TCP kernel is not
-    encrypted (the build runs on one machine; nothing leaves it), which buried the build's real messages."""
+    encrypted (the build runs on one machine; nothing leaves it), which buried the build's real messages. They
+    ignore the package's CompileNotice (a build on a machine without heyoka's disk cache compiles everything
+    once): a tutorial shows no compile notice, and with it no path of the build machine."""
     profile = GENERATED / "ipython" / "profile_default"
     profile.mkdir(parents=True, exist_ok=True)
-    (profile / "ipython_kernel_config.py").write_text('c.IPKernelApp.log_level = "ERROR"\n')
+    (profile / "ipython_kernel_config.py").write_text(KERNEL_CONFIG)
     os.environ["IPYTHONDIR"] = str(profile.parent)
 
 

@@ -156,3 +156,22 @@ def test_every_image_links_to_its_full_size_file(site):
                 unlinked.setdefault(name, []).append(match.group(1))
     assert not unlinked, unlinked
 
+
+
+def test_the_tutorials_kernels_show_no_compile_notice(tmp_path, monkeypatch):
+    """A build on a machine without heyoka's disk cache compiles every model once: the tutorials' kernels
+    (docs/conf.py's profile) print no CompileNotice, and with it no path of the build machine."""
+    nbformat = pytest.importorskip("nbformat")
+    from nbclient import NotebookClient
+
+    namespace: dict = {"__file__": str(DOCS / "conf.py")}
+    exec(compile((DOCS / "conf.py").read_text(), "docs/conf.py", "exec"), namespace)
+    profile = tmp_path / "ipython" / "profile_default"
+    profile.mkdir(parents=True)
+    (profile / "ipython_kernel_config.py").write_text(namespace["KERNEL_CONFIG"])
+    monkeypatch.setenv("IPYTHONDIR", str(profile.parent))
+    cell = ("import time, tippedisk_analysis.compilation as c\nc.NOTICE_AFTER = 0.01\n"
+            "with c.compiling('a model'):\n    time.sleep(0.3)\nprint('done')")
+    notebook = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(cell)])
+    NotebookClient(notebook, timeout=120, kernel_name="python3").execute()
+    assert [(o.get("name"), o.get("text")) for o in notebook.cells[0].outputs] == [("stdout", "done\n")]
