@@ -24,7 +24,7 @@ def _classes(ds: xr.Dataset):
     values = [int(v) for v in ds["outcome"].attrs["flag_values"]]
     names = ds["outcome"].attrs["flag_meanings"].split()
     colours = [LABEL_COLOURS.get(name) for name in names]
-    free = [c for c in ATTRACTOR_PALETTE]
+    free = list(ATTRACTOR_PALETTE)
     for i, name in enumerate(names):  # each kind's first attractor takes the kind's colour
         first = KIND_FIRST.get(name.split("_")[1] if "_" in name else name)
         if colours[i] is None and first in free:
