@@ -112,3 +112,23 @@ def test_van_der_pol_has_the_floquet_exponent_of_the_literature():
     assert orbit.period == pytest.approx(6.663286859, rel=1e-8)
     exponent = math.log(abs(orbit.multipliers[~orbit.trivial][0])) / orbit.period
     assert exponent == pytest.approx(-1.059377, abs=2e-6)
+
+
+def test_a_singular_block_on_an_orbit_gives_nan_multipliers_and_the_reason_not_an_exception():
+    """The collocation problem's multipliers where a condensed block is singular (forced here): NaN, a message
+    naming the interval, the stability undecided; the monodromy formed densely is NaN too."""
+    from tippedisk_analysis.dynamics.collocation import CollocationProblem
+
+    system = dy.textbook_system("vanderpol")
+    orbit = dy.find_orbit(system, [2.0, 0.0], 6.66, system.with_pars(mu=1.0), method="collocation", ntst=20)
+    prob = CollocationProblem(system, orbit.pars, ntst=20)
+    u = prob.pack(orbit.states, orbit.period)
+    ev = prob._evaluate(u)
+    A, B = (np.array(block) for block in ev["condensed"])
+    B[5] = 0.0
+    ev["condensed"] = (A, B)
+    assert np.all(np.isnan(prob.state_eigenvalues(u)))
+    assert np.all(np.isnan(ev["M"]))
+    record = prob.orbit(u)
+    assert "mesh interval 5" in record.message and len(record.message.splitlines()) == 1
+    assert record.multiplier_source == "none" and not record.multipliers_reliable

@@ -483,7 +483,7 @@ class CollocationProblem(OrbitProblem):
                              method="collocation",
                              discretisation_error=self.mesh.error_estimate(X, self.system.state_scale),
                              mesh=self.mesh.tau.copy(), flow_multiplier_error=flow_error,
-                             multiplier_source="collocation")
+                             multiplier_source="collocation" if multiplier_status == "completed" else "none")
 
 
 def _signed_distance(values: np.ndarray) -> float:

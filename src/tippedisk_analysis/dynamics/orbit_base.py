@@ -354,7 +354,8 @@ class PeriodicOrbit:
     discretisation_error: float | None = None  # collocation: estimated max error of x(t) / scale (shooting: None)
     mesh: np.ndarray | None = None  # collocation: the mesh (ntst + 1 times in [0, 1])
     flow_multiplier_error: float = math.nan  # |mu - 1| of the flow direction's multiplier: the multipliers' check
-    multiplier_source: str = "shooting"  # the shooting monodromy, or "collocation" (its pencil)
+    multiplier_source: str = "shooting"  # the shooting monodromy, "collocation" (its condensed blocks) or "none"
+    # (not computed: a singular block, the reason in the message)
 
     @property
     def converged(self) -> bool:

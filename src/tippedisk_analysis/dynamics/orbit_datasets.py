@@ -23,8 +23,9 @@ from .system import System
 SPECIAL_KINDS = {"bound": 0, "fold": 1, "branch_point": 2, "period_doubling": 3, "neimark_sacker": 4,
                  "homoclinic": 5, "hopf": 6, "user": 7, "heteroclinic": 8, "snic": 9, "period_bound": 10}
 """int8 codes of ``special_kind`` in periodic-orbit datasets."""
-MULTIPLIER_SOURCES = {"collocation": 0, "shooting": 1}
-"""int8 codes of ``multiplier_source`` in collocation datasets."""
+MULTIPLIER_SOURCES = {"collocation": 0, "shooting": 1, "none": 2}
+"""int8 codes of ``multiplier_source`` in collocation datasets (none: not computed, a singular collocation block;
+the multipliers are stored as 0)."""
 
 
 def branch_orbits(prob: OrbitProblem, br: continuation.Branch, n_samples: int = N_SAMPLES) -> list[PeriodicOrbit]:
@@ -138,8 +139,9 @@ def orbits_dataset(orbits: list[PeriodicOrbit], status: str, message: str, confi
                                      mixed_units("observables along the orbit", "observable"))
     data["flow_multiplier_error"] = ("point", clean([min(o.flow_multiplier_error, 1e300) for o in orbits]), {
         "units": "1", "long_name": "|mu - 1| of the flow direction's Floquet multiplier (the multipliers' check: "
-                                   f"above {TRIVIAL_TOL:g} and a tenth of the nontrivial ones' distance from the unit "
-                                   "circle they decide no stability)"})
+                                   f"above {TRIVIAL_TOL:g}, a tenth of the nontrivial ones' distance from the unit "
+                                   "circle and, in log |mu|, a tenth of their smallest |log |mu|| they decide no "
+                                   "stability)"})
     data.update(_collocation_columns(orbits))
     if arclength is not None:
         data["arclength"] = ("point", np.asarray(arclength, float), {"units": "1", "long_name": "pseudo-arclength"})
@@ -179,9 +181,9 @@ def _collocation_columns(orbits: list[PeriodicOrbit]) -> dict:
                                                              "more accurate)", "comment": "1e300: not estimated (a "
                                                              "failed search)"}),
         "multiplier_source": ("point", np.array([MULTIPLIER_SOURCES[o.multiplier_source] for o in orbits], np.int8),
-                              flag_attrs("the Floquet multipliers from the collocation equations, or from the "
-                                         "monodromy of the orbit corrected by shooting (where the collocation's fail "
-                                         "their check)", MULTIPLIER_SOURCES)),
+                              flag_attrs("the Floquet multipliers from the condensed collocation blocks (periodic "
+                                         "QR), from a shooting monodromy, or none (a singular block: the multipliers "
+                                         "are stored as 0 and decide no stability)", MULTIPLIER_SOURCES)),
         "ntst": ("point", np.array([len(o.mesh) - 1 if o.mesh is not None else 0 for o in orbits], np.int32),
                  {"units": "1", "long_name": "collocation mesh intervals of the orbit (0: a failed search)"}),
     }
