@@ -132,3 +132,24 @@ def test_a_singular_block_on_an_orbit_gives_nan_multipliers_and_the_reason_not_a
     record = prob.orbit(u)
     assert "mesh interval 5" in record.message and len(record.message.splitlines()) == 1
     assert record.multiplier_source == "none" and not record.multipliers_reliable
+
+
+def test_a_singular_system_during_a_branch_ends_it_with_a_status_and_keeps_its_orbits(monkeypatch):
+    """numpy's LinAlgError anywhere in a step (forced here at the 8th orbit's multipliers) ends the branch with the
+    status singular, a one-line message and the orbits computed so far in the dataset."""
+    from tippedisk_analysis.dynamics.collocation import CollocationProblem
+
+    original, calls = CollocationProblem.state_eigenvalues, []
+
+    def failing(self, u):
+        calls.append(1)
+        if len(calls) == 8:
+            raise np.linalg.LinAlgError("Singular matrix")
+        return original(self, u)
+
+    monkeypatch.setattr(CollocationProblem, "state_eigenvalues", failing)
+    system = dy.textbook_system("hopf")
+    po = dy.hopf_branch(system, (0.0, 0.0, 0.0), system.with_pars(beta=0.0), "beta", bounds=(-0.1, 1.0))
+    assert po.attrs["status"] == "singular" and "Singular matrix" in po.attrs["message"]
+    assert len(po.attrs["message"].splitlines()) == 1
+    assert po.sizes["point"] == 7 and np.all(po.orbit_status.values == 0)

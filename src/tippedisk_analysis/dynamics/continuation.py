@@ -16,7 +16,8 @@ bounds (located exactly), after max_points, or on a singular corrector. A branch
 (:attr:`Branch.status`): ``completed`` only at a bound or a terminal special point; ``max_points`` when the
 point budget ran out; ``stalled`` when STALL_POINTS consecutive points moved the first free parameter by
 less than STALL_TOL (relative): the branch is vertical there (a degenerate point, a family at one parameter
-value) or creeps; ``corrector_failed``.
+value) or creeps; ``corrector_failed``; ``singular`` where a linear system is singular (numpy's LinAlgError),
+with the points so far kept.
 
 Special points (test functions on the eigenvalues s_i of the state Jacobian):
 
@@ -52,7 +53,7 @@ STALL_POINTS, STALL_TOL = 30, 1e-10  # a branch whose last 30 points moved p by 
 CHORD_RATE = 0.1  # chord steps go on while each shrinks the step at least tenfold (else a new Jacobian)
 MAX_REFINEMENTS = 2  # finer discretisations tried for one step (Problem.refine) before the step is shortened
 FOLD_NOISE = 1e-9  # a sign change of the tangent's parameter component below this on both sides is no fold
-STATUSES = ("completed", "max_points", "stalled", "corrector_failed")
+STATUSES = ("completed", "max_points", "stalled", "corrector_failed", "singular")
 RESULTS = frozenset({"completed", "max_points", "degenerate"})  # branch statuses that are results, not failures
 # (``degenerate``: an orbit branch from a degenerate Hopf point, :mod:`.orbit_branches`)
 
@@ -169,72 +170,77 @@ def continue_branch(problem: Problem, u0: np.ndarray, options: Options = Options
     dropped: list[str] = []  # test-function sign changes that were not zeros
     ds, status, message, refinements, base, guess = abs(options.ds), "completed", "", 0, None, None
     first = problem.parameters[0]
-    while True:
-        if len(points) >= options.max_points:
-            status, message = "max_points", (f"ran out of points (max_points = {options.max_points}) at "
-                                             f"{_where(problem, points[-1].u)}; raise max_points or ds_max")
-            break
-        if len(points) >= STALL_POINTS and _span(points, first) <= STALL_TOL * (1 + abs(points[-1].u[first])):
-            status, message = "stalled", (f"stalled: {STALL_POINTS} points within {_span(points, first):.2g} of "
-                                          f"{_where(problem, points[-1].u)} (a vertical branch, e.g. a canard "
-                                          "explosion; raise ds_max or continue in another parameter)")
-            break
-        last = base or points[-1]  # the last point, or that point carried to a new discretisation
-        u_new, iterations = _step(problem, last, ds, options, guess)
-        guess = None
-        if u_new is None:
-            ds *= 0.5
-            if ds < options.ds_min:
-                status = "corrector_failed"
-                message = (f"the corrector failed below ds_min = {options.ds_min:g} at {_where(problem, last.u)}; "
-                           "a singular point or the end of the branch")
+    try:
+        while True:
+            if len(points) >= options.max_points:
+                status, message = "max_points", (f"ran out of points (max_points = {options.max_points}) at "
+                                                 f"{_where(problem, points[-1].u)}; raise max_points or ds_max")
                 break
-            continue
-        if ds >= 2 * options.ds_min and problem.refine(u_new):  # too coarse: redo the step on the finer one
-            refinements += 1
-            if refinements > MAX_REFINEMENTS:  # the orbit changes too much over the step for any mesh: shorten it
-                ds *= 0.5
-            else:  # from the rejected solution carried over (a far better guess than the predictor)
-                rejected = Point(u_new, last.tangent, last.arclength + ds, last.eigenvalues, iterations, "",
-                                 last.discretisation)
-                guess = problem.carry(rejected)[0]
-            base = _carried(problem, last, problem.carry(last))
-            continue
-        refinements = 0
-        _locate_marks(problem, last, u_new, ds, marks, special, points, options)
-        crossed = _first_bound_crossed(problem, last.u, u_new)
-        if crossed is not None:
-            end = _locate_bound(problem, last, u_new, ds, crossed, options)
-            if end is None:  # the corrector fails between the last point and the bound: try a shorter step
+            if len(points) >= STALL_POINTS and _span(points, first) <= STALL_TOL * (1 + abs(points[-1].u[first])):
+                status, message = "stalled", (f"stalled: {STALL_POINTS} points within {_span(points, first):.2g} of "
+                                              f"{_where(problem, points[-1].u)} (a vertical branch, e.g. a canard "
+                                              "explosion; raise ds_max or continue in another parameter)")
+                break
+            last = base or points[-1]  # the last point, or that point carried to a new discretisation
+            u_new, iterations = _step(problem, last, ds, options, guess)
+            guess = None
+            if u_new is None:
                 ds *= 0.5
                 if ds < options.ds_min:
-                    status, message = "corrector_failed", (f"the corrector failed before the bound "
-                                                           f"{problem.names[crossed[0]]} = {crossed[1]:g}")
+                    status = "corrector_failed"
+                    message = (f"the corrector failed below ds_min = {options.ds_min:g} at {_where(problem, last.u)}; "
+                               "a singular point or the end of the branch")
                     break
                 continue
-            if detect:
-                _detect_and_locate(problem, last, end, special, points, options, dropped)
-            points.append(end)
-            message = f"reached the bound {problem.names[crossed[0]]} = {crossed[1]:g}"
-            break
-        new = _make_point(problem, u_new, last.tangent, last.arclength + ds, iterations)
-        if detect:
-            n_special = len(special)
-            _detect_and_locate(problem, last, new, special, points, options, dropped)
-            ends = [sp for sp in special[n_special:] if sp.kind in problem.terminal]
-            if ends:  # the branch ends at the first terminal special point: drop what lies beyond it
-                del points[ends[0].index + 1:]
-                del special[special.index(ends[0]) + 1:]
-                message = f"ended at a {ends[0].kind} point at {_where(problem, ends[0].u)}"
+            if ds >= 2 * options.ds_min and problem.refine(u_new):  # too coarse: redo the step on the finer one
+                refinements += 1
+                if refinements > MAX_REFINEMENTS:  # the orbit changes too much over the step for any mesh: shorten it
+                    ds *= 0.5
+                else:  # from the rejected solution carried over (a far better guess than the predictor)
+                    rejected = Point(u_new, last.tangent, last.arclength + ds, last.eigenvalues, iterations, "",
+                                     last.discretisation)
+                    guess = problem.carry(rejected)[0]
+                base = _carried(problem, last, problem.carry(last))
+                continue
+            refinements = 0
+            _locate_marks(problem, last, u_new, ds, marks, special, points, options)
+            crossed = _first_bound_crossed(problem, last.u, u_new)
+            if crossed is not None:
+                end = _locate_bound(problem, last, u_new, ds, crossed, options)
+                if end is None:  # the corrector fails between the last point and the bound: try a shorter step
+                    ds *= 0.5
+                    if ds < options.ds_min:
+                        status, message = "corrector_failed", (f"the corrector failed before the bound "
+                                                               f"{problem.names[crossed[0]]} = {crossed[1]:g}")
+                        break
+                    continue
+                if detect:
+                    _detect_and_locate(problem, last, end, special, points, options, dropped)
+                points.append(end)
+                message = f"reached the bound {problem.names[crossed[0]]} = {crossed[1]:g}"
                 break
-        points.append(new)
-        carried = problem.remesh(new)
-        base = None if carried is None else _carried(problem, new, carried)
-        problem.set_reference((base or new).u)
-        if on_point is not None:
-            on_point(points[-1])
-        if iterations <= options.easy_iterations:
-            ds = min(options.ds_max, ds * options.growth)
+            new = _make_point(problem, u_new, last.tangent, last.arclength + ds, iterations)
+            if detect:
+                n_special = len(special)
+                _detect_and_locate(problem, last, new, special, points, options, dropped)
+                ends = [sp for sp in special[n_special:] if sp.kind in problem.terminal]
+                if ends:  # the branch ends at the first terminal special point: drop what lies beyond it
+                    del points[ends[0].index + 1:]
+                    del special[special.index(ends[0]) + 1:]
+                    message = f"ended at a {ends[0].kind} point at {_where(problem, ends[0].u)}"
+                    break
+            points.append(new)
+            carried = problem.remesh(new)
+            base = None if carried is None else _carried(problem, new, carried)
+            problem.set_reference((base or new).u)
+            if on_point is not None:
+                on_point(points[-1])
+            if iterations <= options.easy_iterations:
+                ds = min(options.ds_max, ds * options.growth)
+    except np.linalg.LinAlgError as err:  # a singular system no step size avoids: the points so far are kept
+        status, message = "singular", (f"a singular linear system after {_where(problem, points[-1].u)} "
+                                       f"({err}); the points so far are kept: shorten ds_max or refine the "
+                                       "discretisation")
     if dropped:
         message += f"; {len(dropped)} sign change(s) of a test function not located as a zero (attribute unlocated)"
     label_points(special)
