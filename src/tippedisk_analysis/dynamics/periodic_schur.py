@@ -3,8 +3,8 @@ condensed blocks, accurate when they spread over hundreds of orders of magnitude
 
 The blocks are N pencils (A_j, B_j) of size n x n: A_j x_j + B_j x_j+1 = 0, so x_N = M x_0 with the monodromy
 M = (-B_N-1^-1 A_N-1) ... (-B_0^-1 A_0). Neither M nor any B_j^-1 is formed. A periodic QR sweep (orthogonal
-iteration on the formal product, as Bojanczyk, Golub & Van Dooren's periodic Schur reduction uses it) carries an
-orthonormal basis Z_0 of R^n once around the product:
+iteration on the formal product: the unshifted form of Bojanczyk, Golub & Van Dooren's periodic QR algorithm)
+carries an orthonormal basis Z_0 of R^n once around the product:
 
     A_j Z_j = Q_j S_j (QR),    Q_j^T B_j = T_j Z_j+1^T (RQ),
 
@@ -54,11 +54,6 @@ class ProductSpectrum:
     @property
     def completed(self) -> bool:
         return self.status == "completed"
-
-    def n_outside(self, trivial: np.ndarray | None = None) -> int:
-        """Multipliers outside the unit circle (log |mu| > 0), but the ``trivial`` ones."""
-        keep = np.ones(len(self.values), bool) if trivial is None else ~np.asarray(trivial)
-        return int(np.sum(self.log_moduli[keep] > 0.0))
 
     def flow_index(self, direction: np.ndarray) -> int:
         """The position of the multiplier near 1 whose eigenvector is ``direction`` (the flow f(x_0)): the block
