@@ -8,7 +8,8 @@ Thin: parse, call the library, print one line. The promises every command keeps:
   output both finish; the last one's rename wins, nothing is half-written);
 * Ctrl-C: one line saying what was kept (chunks, a checkpoint) and how to resume, exit status 130;
 * a run that ended with a numerical failure (status nonfinite, not_converged, zeno, failed) or a branch that
-  stalled or whose corrector failed exits with 1.
+  stalled, whose corrector failed or that met a singular step exits with 1; a Lyapunov spectrum that has not
+  converged is a result with its error bars (exit 0, its status says so).
 """
 
 from __future__ import annotations
