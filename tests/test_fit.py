@@ -259,3 +259,18 @@ def test_cli_bad_data_is_one_line_and_exit_2(tmp_path, capsys, header, rows, ext
     out, err = capsys.readouterr()
     assert code == 2 and out == "" and len(err.strip().splitlines()) == 1 and match in err, err
     assert not (tmp_path / "f.nc").exists()
+
+
+def test_a_stiff_trial_point_fails_fast_instead_of_running_to_the_step_limit():
+    """After the start's run a trial run may take 20 times its Taylor steps, then it counts as failed (a stiff
+    corner of the parameter space costs the trust region one refused step, not minutes)."""
+    from tippedisk_analysis.dynamics.fitting import RunFailed, solve
+
+    x = hy.make_vars("x")
+    decay = dy.System("decay", (x,), (-hy.par[0] * x,), {"k": 1.0})
+    t = np.linspace(0, 10, 51)
+    problem = dy.FitProblem(decay, t, {"x": np.exp(-t)}, ["k"], state=[1.0])
+    solve(problem, horizons=(1.0,))
+    assert problem.max_steps == max(1000, 20 * problem.steps)
+    with pytest.raises(RunFailed, match="step_limit"):
+        problem.residuals([1e5])

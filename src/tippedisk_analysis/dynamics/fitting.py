@@ -26,7 +26,8 @@ from ..errors import ParameterError
 from .fit_dataset import Stage, fit_dataset
 from .system import System
 
-MAX_STEPS = 200_000  # Taylor steps per run before a trial point counts as failed (a wild trust-region step)
+MAX_STEPS = 200_000  # Taylor steps of the start's run before it counts as failed
+STEP_FACTOR = 20  # a trial run needing this many times the start's steps counts as failed (a stiff trial point)
 PENALTY = 1e6  # a trial point whose run fails gets residuals PENALTY * (1 + rms of the start's): the step is refused
 
 
@@ -91,6 +92,7 @@ class FitProblem:
         self._ta = copy.copy(system.taylor(self.tol, tangents=self.tangents, parameters=self.free_pars))
         self._observables = self._observable_function()
         self.runs = 0  # model runs (each with its sensitivities)
+        self.max_steps, self.steps = MAX_STEPS, 0  # the step limit of a run; the steps of the last run
         self._cache: tuple | None = None
 
     # -- input checks (one line each, naming the fix)
@@ -202,7 +204,8 @@ class FitProblem:
         ta.state[n:] = self._variations0
         grid = self.times[:N] if self.times[0] == self.t0 else np.append(self.t0, self.times[:N])
         self.runs += 1
-        res = ta.propagate_grid(grid, max_steps=MAX_STEPS)
+        res = ta.propagate_grid(grid, max_steps=self.max_steps)
+        self.steps = int(res[3])
         out = np.asarray(res[-1])
         if res[0] != hy.taylor_outcome.time_limit or len(out) != len(grid) or not np.all(np.isfinite(out)):
             raise RunFailed(f"the run stopped ({res[0]!r}) at t = {ta.time:.6g} before t = {grid[-1]:.6g}")
@@ -261,6 +264,7 @@ def solve(problem: FitProblem, *, bounds=None, horizons=HORIZONS, max_nfev: int 
     except RunFailed as exc:
         raise ParameterError(f"the model cannot be run over the record from the start ({exc}); give a start closer to "
                              "the data or a shorter record") from None
+    problem.max_steps = max(1000, STEP_FACTOR * problem.steps)
     penalty = PENALTY * (1.0 + start_rms)
     t = problem.times
     stages = []
