@@ -59,3 +59,29 @@ def test_a_curve_of_cycles_starts_at_a_fold_in_one_of_its_parameters(bautin_bran
         dy.special_point_curve(system, branch, "LP1", ("l", "other"), bounds={})
     with pytest.raises(ParameterError, match="no special point 'PD1'"):
         dy.special_point_curve(system, branch, "PD1", ("beta", "l"), bounds={})
+
+
+def _one_parameter_folds(system, beta: float) -> list[tuple[float, float]]:
+    """(D, T) of the folds of cycles on the orbit branch from the Hopf point of 'ab' at fixed beta (ntst 80)."""
+    eq = dy.equilibrium_branch(system, [0.0, 0.0], "D", bounds=(0.0, 0.25), pars={"beta": beta})
+    hopf = next(label for label in eq.attrs["labels"].split() if label.startswith("HOPF"))
+    orbits = dy.orbit_branch(system, eq, hopf, bounds=(0.0, 0.25), ntst=80, error_tol=1e-9)
+    return [(float(orbits["D"].values[i]), float(orbits["period"].values[i]))
+            for label, i in zip(orbits["special_label"].values, orbits["special_index"].values)
+            if str(label).startswith("LP")]
+
+
+def test_ab_fold_of_cycles_curve_agrees_with_one_parameter_branches_at_fixed_beta():
+    """AUTO-07p's 'ab' (B = 14): the curve from the fold at beta = 3 in (beta, D), its points at beta = 2.7 and 3.3
+    (marks) against the folds of one-parameter orbit branches in D at those beta (an independent continuation)."""
+    system = dy.textbook_system("ab")
+    eq = dy.equilibrium_branch(system, [0.0, 0.0], "D", bounds=(0.0, 0.25), pars={"beta": 3.0})
+    branch = dy.orbit_branch(system, eq, "HOPF1", bounds=(0.0, 0.25))
+    curve = dy.special_point_curve(system, branch, "LP1", ("beta", "D"), bounds={"beta": (2.6, 3.4)},
+                                   marks=(2.7, 3.3))
+    assert curve.attrs["status"] == "completed" and curve.attrs["labels"] == "UZ1 UZ2"
+    for index in curve["special_index"].values:
+        beta = float(curve["beta"].values[index])
+        [(D, T)] = _one_parameter_folds(system, beta)
+        assert curve["D"].values[index] == pytest.approx(D, abs=1e-9)
+        assert curve["period"].values[index] == pytest.approx(T, rel=1e-6)

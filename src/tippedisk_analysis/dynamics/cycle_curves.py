@@ -43,7 +43,7 @@ from .orbit_base import orbit_size
 from .orbit_datasets import SPECIAL_KINDS as ORBIT_KINDS
 from .system import System
 
-CURVE_KINDS = {"cusp": 0}
+CURVE_KINDS = {"cusp": 0, "user": 1}
 """int8 codes of ``special_kind`` in datasets of kind ``cycle_curve``."""
 FD_STEP = 1e-6  # the central difference of f_x along v: this share of the state scale
 CURVE_OPTIONS = {"ds": 0.02, "ds_max": 0.2, "max_points": 300, "easy_iterations": 5}
@@ -273,12 +273,13 @@ def _fold_start(system: System, branch: xr.Dataset, label: str) -> tuple[int, np
 
 
 def cycle_fold_curve(system: System, branch: xr.Dataset, label: str, parameters, *, bounds: dict,
-                     scales: dict | None = None, ntst: int | None = None, ncol: int | None = None,
+                     scales: dict | None = None, ntst: int | None = None, ncol: int | None = None, marks=(),
                      options: continuation.Options | None = None, **option_keywords) -> xr.Dataset:
     """The curve of folds of cycles through ``label`` (an LP of ``branch``, a ``periodic_orbits`` dataset of
     collocation orbits of ``system``) in the two ``parameters`` (p, q), both ways within ``bounds`` {name: (low,
     high)}, with its cusps of cycles; ``ntst``, ``ncol``: the mesh (default the fold's orbit's; the mesh is adapted
-    to that orbit and then fixed); ``options`` or its fields as keywords (ds, ds_max, max_points, ...). A dataset of
+    to that orbit and then fixed); ``marks``: values of the first parameter where the curve's points are computed
+    exactly (user points UZ1, ...); ``options`` or its fields as keywords (ds, ds_max, max_points, ...). A dataset of
     kind ``cycle_curve``."""
     if branch.attrs.get("kind") != "periodic_orbits":
         raise DatasetError(f"the dataset is of kind {branch.attrs.get('kind')!r}; give a periodic_orbits dataset")
@@ -305,7 +306,7 @@ def cycle_fold_curve(system: System, branch: xr.Dataset, label: str, parameters,
     u0 = continuation.solve_at(prob, u0, 2, u0[2], opts)
     if u0 is None:
         raise ParameterError(f"no fold of cycles found next to {label} at the fixed {parameters[1]}: raise ntst")
-    br = continuation.continue_both_ways(prob, u0, opts)
+    br = continuation.continue_both_ways(prob, u0, opts, marks=marks)
     return curve_dataset(prob, br, {"source_label": label, "parameters": parameters, "ntst": prob.mesh.ntst,
                                     "ncol": prob.mesh.m})
 
@@ -341,7 +342,7 @@ def curve_dataset(prob: CycleFoldProblem, br: continuation.Branch, info: dict) -
         "special_kind": ("special_point", np.array([CURVE_KINDS[sp.kind] for sp in br.special_points], np.int8),
                          flag_attrs("type of the special point", CURVE_KINDS)),
         "special_label": ("special_point", np.array([sp.label for sp in br.special_points], dtype=str),
-                          {"long_name": "label: CP cusp of cycles"}),
+                          {"long_name": "label: CP cusp of cycles, UZ user point (marks)"}),
         "special_index": ("special_point", np.array([sp.index for sp in br.special_points], np.int32),
                           {"units": "1", "long_name": "index along dim point"}),
     }
