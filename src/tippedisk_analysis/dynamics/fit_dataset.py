@@ -22,7 +22,7 @@ import xarray as xr
 from ..results import index_coordinate, make_attrs
 from .datasets import flag_attrs, label_coordinates, mixed_units
 
-STATUSES = ("completed", "not_converged", "bound_hit", "misfit", "not_identifiable")
+STATUSES = ("completed", "not_converged", "bound_hit", "misfit", "not_identifiable")  # after completed: by priority
 SYSTEMATIC = 0.5  # lag-1 autocorrelation of a series' residuals above which they are systematic (white noise: ~0)
 KINDS = {"initial_state": 0, "parameter": 1}
 AT_BOUND = {"inside": 0, "lower": 1, "upper": 2}
@@ -127,7 +127,7 @@ def status_of(problem, stage: Stage, stats: dict, theta, tol: float) -> tuple[st
         i, j = np.unravel_index(np.argmax(corr), corr.shape)
         found.append(("completed", f"{names[i]} and {names[j]} are correlated ({stats['corr'][i, j]:+.4f}): a "
                       "longer or richer record separates them"))
-    order = ("not_converged", "bound_hit", "misfit", "not_identifiable", "completed")
+    order = (*STATUSES[1:], "completed")  # the first finding in this order names the status
     status = min((s for s, _ in found), key=order.index, default="completed")
     head = f"converged ({problem.runs} model runs)" if status == "completed" else f"{problem.runs} model runs"
     return status, "; ".join([head, *(text for _, text in found), f"rms residual {rms}"])
