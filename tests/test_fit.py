@@ -274,3 +274,19 @@ def test_a_stiff_trial_point_fails_fast_instead_of_running_to_the_step_limit():
     assert problem.max_steps == max(1000, 20 * problem.steps)
     with pytest.raises(RunFailed, match="step_limit"):
         problem.residuals([1e5])
+
+
+def test_cli_plot_draws_a_fit_dataset(tmp_path, capsys):
+    """`tippedisk plot` on a fit dataset: data against the fitted run, residuals, the correlation matrix."""
+    from tippedisk_analysis.cli import main
+    from tippedisk_analysis.plotting.fit import observed_names
+
+    t, _exact, data = pendulum_record(0, n=101)
+    energy = 0.5 * np.gradient(data, t) ** 2 + TRUE["k"] * (1 - np.cos(data))
+    energy[::7] = np.nan  # missing samples are left out of the figure
+    ds = dy.fit(pendulum(), t, {"x": data, "energy": energy}, ["c", "k", "x"], state={"x": 1.0, "v": 0.0})
+    assert observed_names(ds) == ["x", "energy"]
+    path = td.save(ds, tmp_path / "fit.nc")
+    assert main(["plot", str(path), "-o", str(tmp_path / "fit.png")]) == 0
+    assert "fit figure" in capsys.readouterr().out
+    assert (tmp_path / "fit.png").stat().st_size > 20_000

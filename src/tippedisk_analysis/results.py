@@ -49,7 +49,7 @@ KIND_TITLES = {"simulation": "Simulation", "continuation": "Continuation", "peri
                "spin_passage": "Passage along the inverted spins",
                "symmetric_family": "Family of symmetric periodic orbits",
                "nutation_cycles": "Nutation cycles of the held-spin model",
-               "homoclinic_orbits": "Homoclinic orbits"}
+               "homoclinic_orbits": "Homoclinic orbits", "fit": "Fit to a record"}
 
 # name: (units, long_name)
 VARIABLES: dict[str, tuple[str, str]] = {

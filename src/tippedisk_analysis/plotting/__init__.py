@@ -18,7 +18,7 @@ from .. import files  # noqa: E402
 from ..errors import DatasetError  # noqa: E402
 from ..results import require_samples  # noqa: E402
 from . import continuation, stability_map, trajectories  # noqa: E402, F401 (registration)
-from . import attractors, periodic  # noqa: E402, F401 (registration)
+from . import attractors, fit, periodic  # noqa: E402, F401 (registration)
 from .animation import animate  # noqa: E402
 from .registry import FIGURES  # noqa: E402
 from .simulation import comparison_figure, gap_figure, simulation_figure, stroboscopic_figure  # noqa: E402
