@@ -35,6 +35,8 @@ autodoc_typehints = "none"
 napoleon_numpy_docstring = True
 html_theme = "furo"  # wraps code and tables to the window, fits a laptop screen
 html_title = f"tippedisk_analysis {release}"
+html_static_path = ["_static"]
+html_css_files = ["site.css"]  # option names unbroken, long lines scroll in their box, the title fits 390 px
 suppress_warnings = ["myst.header"]  # pages written for GitHub start at level-2 headings in places
 smartquotes = False  # "--disk" stays two hyphens in option tables and prose (no en dash)
 
@@ -113,15 +115,45 @@ def _cli_pages() -> dict:
         for action in command._actions:
             if isinstance(action, argparse._HelpAction):
                 continue
-            flags = ", ".join(action.option_strings) or (action.metavar or action.dest)
-            default = "" if action.default in (None, argparse.SUPPRESS, False) or not action.option_strings \
-                else f"`{action.default}`"
-            text = formatter._expand_help(action) if action.help else ""
-            lines.append(f"| `{flags}` | {default} | {_cell(text)} |")
+            flags = ", ".join(f"`{flag}`" for flag in action.option_strings) or f"`{action.metavar or action.dest}`"
+            text = " ".join(formatter._expand_help(action).split()) if action.help else ""
+            stored = "" if action.default in (None, argparse.SUPPRESS, False, []) or not action.option_strings \
+                else str(action.default)
+            value = action.option_strings and action.nargs != 0  # a flag's help names no value of its own
+            default = (_help_default(text, bare=False) or stored or value and _help_default(text)) if text else stored
+            lines.append(f"| {flags} | {f'`{_cell(default)}`' if default else ''} | {_cell(text)} |")
         if name in examples:
             lines += ["", "Example:", "", "```bash", examples[name], "```"]
         pages[f"cli/{name}.md"] = "\n".join(lines) + "\n"
     return pages
+
+
+def _clause(text: str) -> str:
+    """``text`` up to its first ``;``, ``, ``, ``: `` or unbalanced ``)`` (the value a help gives, not its gloss)."""
+    depth = 0
+    for i, char in enumerate(text):
+        depth += (char == "(") - (char == ")")
+        if depth < 0 or (depth == 0 and (char == ";" or text.startswith((", ", ": "), i))):
+            return text[:i].strip()
+    return text.strip()
+
+
+def _help_default(text: str, bare: bool = True) -> str:
+    """The default an option's help gives: "(default X)", "(Table 2: X)", or (``bare``) a value in parentheses
+    after the option's unit or ending the help, "[m] (0.045)", "(--disk geometry; 0.015)"; "" when it gives
+    none. A default given for another option ("--to E_MAX [J] (default ...)") is not this option's."""
+    for said in re.finditer(r"\bdefault\b:?\s+(?=\S)|\(([^()]*;\s*)?Table \d+:\s*", text):
+        if not re.search(r"--[\w-]+ [A-Z][A-Z_]*(?: \[[^]]*\])? \($", text[:said.start()]):
+            return _clause(text[said.end():])
+    for group in re.finditer(r"(?:(?<=\] )|^)\(|\((?=[^()]*\)$)", text) if bare else ():
+        rest = text[group.end():]
+        while rest:
+            value = _clause(rest)
+            if re.fullmatch(r"(?!default)-?[\w.+/ ]{1,24}", value) and re.search(r"\d|pi|^-", value):
+                return value
+            rest = rest[len(value):].lstrip() if rest[len(value):].lstrip().startswith(";") else ""
+            rest = rest[1:]
+    return ""
 
 
 def _cell(text: str) -> str:

@@ -175,3 +175,54 @@ def test_the_tutorials_kernels_show_no_compile_notice(tmp_path, monkeypatch):
     notebook = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(cell)])
     NotebookClient(notebook, timeout=120, kernel_name="python3").execute()
     assert [(o.get("name"), o.get("text")) for o in notebook.cells[0].outputs] == [("stdout", "done\n")]
+
+
+def cli_rows(site: Path) -> dict[tuple[str, str], tuple[list[str], str, str]]:
+    """{(command, first option): (the option cell's code spans, default cell, meaning)} of the command pages."""
+    rows = {}
+    for path in sorted((site / "_generated" / "cli").glob("*.html")):
+        body = pages(site)[path.relative_to(site).as_posix()]
+        for row in re.findall(r"<tr[^>]*>\s*<td>(.*?)</tr>", body, re.S):
+            cells = re.split(r"</td>\s*<td>", row)
+            codes = [html.unescape(re.sub(r"<[^>]+>", "", c)) for c in re.findall(r"<code\b.*?</code>", cells[0], re.S)]
+            default, meaning = (" ".join(prose(c).split()) for c in cells[1:3])
+            default = default or " ".join(html.unescape(re.sub(r"<[^>]+>", "", cells[1])).split())
+            rows[(path.stem, codes[0])] = (codes, default, meaning)
+    return rows
+
+
+def test_command_pages_show_the_default_the_help_gives(site):
+    """The default column holds the default an option's help states, argparse's or the text's ("(default 0.05)",
+    "(Table 2: 0.435)", "[m] (0.045)"), and every option name is one code span that does not break."""
+    rows = cli_rows(site)
+    read_off_the_help = {("basins", "--dt"): "0.05", ("basins", "--omega"): "40", ("basins", "--mass"): "0.435",
+                         ("basins", "--hole-radius"): "0.015", ("basins", "--radius"): "0.045",
+                         ("basins", "--eps"): "0.1", ("basins", "--threads"): "cores", ("animate", "--size"): "960x540",
+                         ("simulate", "--gamma-dot"): "-alpha_dot cos(beta)", ("simulate", "--model"): "ode-euler",
+                         ("critical-spin", "--eps"): "0.1", ("continue", "--branch"): "inverted",
+                         ("lyapunov", "--t-end"): "20", ("study", "--output-dir"): "output/"}
+    assert {key: rows[key][1] for key in read_off_the_help} == read_off_the_help
+    assert rows[("periodic-orbits", "--frictionless")][1] == ""  # its help's "(default E + 0.1 J)" is --to's
+    said = {key: meaning for key, (_, default, meaning) in rows.items()
+            if re.search(r"\((?:[^()]*; )?default:? [^)\s]|\((?:[^()]*; )?Table \d+: \S", meaning)
+            and not re.search(r"--[\w-]+ [A-Z_]+ (?:\[[^]]*\] )?\(default", meaning) and not default}
+    assert not said, said
+    assert len(rows) > 150
+    assert not [codes for codes, _, _ in rows.values() if any(" " in c or "," in c for c in codes)]
+    css = (site / "_static" / "site.css").read_text()
+    assert re.search(r"td:first-child code[^{]*\{\s*white-space: nowrap", css)
+    assert 'href="../../_static/site.css' in (site / "_generated" / "cli" / "basins.html").read_text()
+
+
+def test_study_list_prints_each_first_sentence_whole(capsys):
+    """`tippedisk study --list`: a study's description is its docstring's first sentence, not cut at the end of
+    the docstring's first line."""
+    import importlib
+
+    from tippedisk_analysis.cli import main
+
+    assert main(["study", "--list"]) == 0
+    for line in capsys.readouterr().out.splitlines():
+        name, text = line.split(maxsplit=1)
+        doc = " ".join(importlib.import_module(f"tippedisk_studies.{name}").__doc__.split())
+        assert doc.startswith(text) and text[-1] in ".?!", (name, text)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import importlib
 import pkgutil
+import re
 import shutil
 from pathlib import Path
 
@@ -28,13 +29,20 @@ def run(name: str, output_dir: str = "output", quick: bool = False):
     return module.main(output_dir, quick=quick)
 
 
+def summary(doc: str | None) -> str:
+    """The first sentence of a docstring on one line, whole (not its first line, which cut sentences)."""
+    text = " ".join((doc or "").strip().split("\n\n")[0].split())
+    end = re.search(r"(?<!\bFig)(?<!\bFigs)(?<!\bSect)(?<!e\.g)(?<!i\.e)[.?!](?=\s|$)", text)
+    return text[:end.end()] if end else text
+
+
 def _arguments(p) -> None:
     try:
         available = names()
     except ImportError:  # pragma: no cover - the studies are not installed
         available = []
     p.add_argument("name", nargs="?", metavar="NAME", help="study name: " + (", ".join(available) or "(none installed)"))
-    p.add_argument("--list", action="store_true", help="print the study names with their first docstring line")
+    p.add_argument("--list", action="store_true", help="print the study names, each with the first sentence of its docstring")
     p.add_argument("--output-dir", default="output",
                    help="folder for the datasets and figures (default output/; created if missing; a study "
                         "replaces its own files there)")
@@ -45,8 +53,7 @@ def _arguments(p) -> None:
 def study(args) -> int:
     if args.list:
         for name in names():
-            doc = (importlib.import_module(f"{STUDIES_PACKAGE}.{name}").__doc__ or "").strip().splitlines()
-            print(f"{name:<30} {doc[0] if doc else ''}")
+            print(f"{name:<30} {summary(importlib.import_module(f'{STUDIES_PACKAGE}.{name}').__doc__)}")
         return 0
     if not args.name:
         raise ParameterError("give a study name or --list")
