@@ -290,3 +290,41 @@ def test_cli_plot_draws_a_fit_dataset(tmp_path, capsys):
     assert main(["plot", str(path), "-o", str(tmp_path / "fit.png")]) == 0
     assert "fit figure" in capsys.readouterr().out
     assert (tmp_path / "fit.png").stat().st_size > 20_000
+
+
+def linear_oscillator() -> dy.System:
+    """The small-angle pendulum x'' + c x' + k x = 0: the wrong model for swings of 1.2 rad."""
+    x, v = hy.make_vars("x", "v")
+    return dy.System("linear_oscillator", (x, v), (v, -hy.par[0] * v - hy.par[1] * x), {"c": 0.5, "k": 3.0})
+
+
+def test_compare_fits_prefers_the_generating_model(tmp_path):
+    """A pendulum record: the pendulum has the lower AIC and BIC than the linear oscillator, with weight ~1."""
+    t, _exact, data = pendulum_record(3)
+    start = dict(state={"x": 1.0, "v": 0.0})
+    right = dy.fit(pendulum(), t, {"x": data}, ["c", "k", "x"], **start)
+    wrong = dy.fit(linear_oscillator(), t, {"x": data}, ["c", "k", "x"], **start)
+    table = td.compare_fits([wrong, right])
+    assert list(table.model.values) == ["linear_oscillator", "damped_pendulum"]
+    assert table.attrs["best_model"] == "damped_pendulum"
+    assert table.delta_aic.values[0] > 10 and table.delta_aic.values[1] == 0
+    assert table.delta_bic.values[0] > 10 and table.akaike_weight.values[1] > 0.99
+    assert table.aic.values[1] == right.attrs["aic"]
+    n = right.attrs["n_samples"]  # AIC without sigma: n ln(rss / n) + 2 p
+    assert table.aic.values[0] == pytest.approx(n * np.log(wrong.attrs["residual_sum_of_squares"] / n) + 6)
+    assert list(table.fit_status.values) == [wrong.attrs["status"], "completed"]
+    back = td.load(td.save(table, tmp_path / "table.nc"))
+    assert list(back.model.values) == ["linear_oscillator", "damped_pendulum"]
+
+
+def test_compare_fits_refuses_fits_of_different_records():
+    t, _exact, data = pendulum_record(3)
+    one = dy.fit(pendulum(), t, {"x": data}, ["c", "k"], state={"x": 1.2, "v": 0.0})
+    other = dy.fit(pendulum(), t, {"x": data + 0.001}, ["c", "k"], state={"x": 1.2, "v": 0.0})
+    with pytest.raises(ParameterError, match="fitted to another record"):
+        dy.compare_fits([one, other], names=["a", "b"])
+    with pytest.raises(ParameterError, match="not 2 distinct names"):
+        dy.compare_fits([one, one])
+    sigma = dy.fit(pendulum(), t, {"x": data}, ["c", "k"], state={"x": 1.2, "v": 0.0}, sigma=NOISE)
+    with pytest.raises(ParameterError, match="differ in whether sigma was given"):
+        dy.compare_fits([one, sigma], names=["a", "b"])

@@ -15,7 +15,8 @@ from .errors import DatasetError, IntegrationError, ParameterError, TippediskErr
 from .version import __version__
 
 _LAZY = {"Disk": "parameters", "Friction": "parameters", "InitialState": "parameters", "Setup": "parameters",
-         "load": "results", "save": "results", "model_names": "solvers", "simulate": "solvers", "fit": "analysis.fit"}
+         "load": "results", "save": "results", "model_names": "solvers", "simulate": "solvers", "fit": "analysis.fit",
+         "compare_fits": "analysis.fit"}
 
 __all__ = [
     "DatasetError", "Disk", "Friction", "InitialState", "IntegrationError", "ParameterError", "Setup",

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from ..dynamics.fit_dataset import compare_fits  # noqa: F401 (td.compare_fits)
 from ..dynamics.fitting import HORIZONS
 from ..dynamics.fitting import fit as fit_system
 from ..errors import DatasetError, ParameterError

@@ -37,7 +37,7 @@ _PUBLIC = {
     "HybridSystem": "hybrid", "Guard": "hybrid", "Jump": "hybrid", "simulate_hybrid": "hybrid",
     "Leg": "hybrid_orbits", "find_hybrid_orbit": "hybrid_orbits", "legs_from_run": "hybrid_orbits",
     "filippov_system": "filippov",
-    "fit": "fitting", "FitProblem": "fitting",  # parameter estimation
+    "fit": "fitting", "FitProblem": "fitting", "compare_fits": "fit_dataset",  # parameter estimation
 }
 
 __all__ = sorted(_PUBLIC)

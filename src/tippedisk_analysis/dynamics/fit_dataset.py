@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
+from ..errors import ParameterError
 from ..results import index_coordinate, make_attrs
 from .datasets import flag_attrs, label_coordinates, mixed_units
 
@@ -202,3 +203,58 @@ def fit_dataset(problem, stages: list[Stage], config: dict, identifiability_tol:
                        horizon_samples=" ".join(str(s.n_samples) for s in stages),
                        least_squares_status=int(last.status))
     return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+def compare_fits(fits, names=None) -> xr.Dataset:
+    """Models fitted to the same record side by side: along ``model`` (``names``, default each fit's ``model`` or
+    ``system`` attribute) the residual sum of squares, AIC, BIC, their differences to the lowest, the Akaike
+    weights exp(-dAIC/2) / sum, the number of free values and each fit's status. Lower AIC/BIC: the better
+    model; a difference above 10 is decisive. Fits of different records (times, data, missing samples) or with and
+    without sigma are refused: their criteria are not comparable."""
+    fits = list(fits)
+    if len(fits) < 2 or any(ds.attrs.get("kind") != "fit" for ds in fits):
+        raise ParameterError("compare_fits needs two or more datasets of kind fit (dy.fit, td.fit, tippedisk fit)")
+    names = [str(ds.attrs.get("model", ds.attrs.get("system", f"fit {i}"))) for i, ds in enumerate(fits)] \
+        if names is None else [str(n) for n in names]
+    if len(set(names)) != len(fits):
+        raise ParameterError(f"compare_fits: the names {names} are not {len(fits)} distinct names; give names=[...]")
+    first = fits[0]
+    series = sorted(str(k) for k in first.data_vars if str(k).endswith(("_data", "_used")))
+    for name, ds in zip(names[1:], fits[1:]):
+        same = (ds.sizes["time"] == first.sizes["time"] and np.array_equal(ds.time.values, first.time.values)
+                and sorted(str(k) for k in ds.data_vars if str(k).endswith(("_data", "_used"))) == series
+                and all(np.array_equal(ds[k].values, first[k].values) for k in series))
+        if not same:
+            raise ParameterError(f"compare_fits: {name!r} was fitted to another record than {names[0]!r} (times, "
+                                 "observed series or missing samples differ); fit every model to the same data")
+        if ds.attrs["sigma_given"] != first.attrs["sigma_given"]:
+            raise ParameterError(f"compare_fits: {name!r} and {names[0]!r} differ in whether sigma was given; give "
+                                 "the same sigma (or none) to every fit")
+    aic = np.array([float(ds.attrs["aic"]) for ds in fits])
+    bic = np.array([float(ds.attrs["bic"]) for ds in fits])
+    weight = np.exp(-(aic - aic.min()) / 2)
+    per = ("model",)
+    data = {
+        "residual_sum_of_squares": (per, [float(ds.attrs["residual_sum_of_squares"]) for ds in fits],
+                                    {"units": "1", "long_name": "sum of the squared weighted residuals"}),
+        "aic": (per, aic, {"units": "1", "long_name": "Akaike information criterion (lower is better)"}),
+        "bic": (per, bic, {"units": "1", "long_name": "Bayesian information criterion (lower is better)"}),
+        "delta_aic": (per, aic - aic.min(), {"units": "1", "long_name": "AIC minus the lowest AIC"}),
+        "delta_bic": (per, bic - bic.min(), {"units": "1", "long_name": "BIC minus the lowest BIC"}),
+        "akaike_weight": (per, weight / weight.sum(), {"units": "1", "long_name": "Akaike weight exp(-dAIC/2) / sum"}),
+        "n_free": (per, np.array([int(ds.attrs["n_free"]) for ds in fits], np.int32),
+                   {"units": "1", "long_name": "number of free values"}),
+        "free": (per, np.array([" ".join(map(str, ds.parameter.values)) for ds in fits], dtype=str),
+                 {"long_name": "the free values"}),
+        "fit_status": (per, np.array([str(ds.attrs["status"]) for ds in fits], dtype=str),
+                       {"long_name": "status of each fit"}),
+    }
+    coords = {"model": ("model", np.array(names, dtype=str), {"long_name": "fitted model"})}
+    best = names[int(np.argmin(aic))]
+    message = f"lowest AIC: {best} (the next is {np.sort(aic - aic.min())[1]:.3g} higher)"
+    unfinished = [n for n, ds in zip(names, fits) if ds.attrs["status"] != "completed"]
+    if unfinished:
+        message += f"; fits not completed: {', '.join(unfinished)} (see fit_status; their criteria may mislead)"
+    return xr.Dataset(data, coords=coords, attrs=make_attrs(
+        "fit_comparison", {"models": names}, "completed", message, title="Models fitted to the same record",
+        n_samples=int(first.attrs["n_samples"]), sigma_given=int(first.attrs["sigma_given"]), best_model=best))
