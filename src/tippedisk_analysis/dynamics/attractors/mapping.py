@@ -10,6 +10,7 @@ import math
 import numpy as np
 
 from ...errors import ParameterError
+from .confirm import confirms
 from .problem import DescribeContext, Problem, _nt_events, _radius, _time_limit, combine
 from .records import DIVERGED, Candidate, FirstTime, Found, RecurrenceSettings
 
@@ -25,6 +26,7 @@ class _Lane:
     lost: int = 0
     att: int = -1
     att_count: int = 0
+    doubted: int = -1  # attractor whose cells the run is in while its full state was found elsewhere (.confirm)
     rejection: int = 0  # why the run's last candidate was no attractor (Problem.rejection_reasons, 1-based)
     buf_t: list = dataclasses.field(default_factory=list)
     buf_x: list = dataclasses.field(default_factory=list)
@@ -139,7 +141,8 @@ def map_points(problem: Problem, settings: RecurrenceSettings, x0, pars, groups=
                 owners[a] = owners.get(a, 0) + 1
         if owners:
             a, c = max(owners.items(), key=lambda kv: (kv[1], -kv[0]))
-            if c >= s.overlap * len(cellset):  # mostly in a known attractor: assigned (its cells unchanged)
+            # mostly in a known attractor's cells and near it in the full state: assigned (its cells unchanged)
+            if c >= s.overlap * len(cellset) and confirms(problem, found[a].description, lane.buf_x[-1]):
                 return a
         cand = Candidate(g, np.array(lane.buf_t), np.array(lane.buf_x).T, np.array(lane.buf_y).T, keys,
                          pars[:, lane.point].copy())
@@ -177,7 +180,9 @@ def map_points(problem: Problem, settings: RecurrenceSettings, x0, pars, groups=
         return label_of[DIVERGED] if problem.escapes and lane.lost > 0 else label_of["failed"]
 
     def step(lane: _Lane, t: float, x, y, key: int):
-        """One sample of a run; returns a label when the run is decided, else None."""
+        """One sample of a run; returns a label when the run is decided, else None. A run in a known attractor's
+        cells whose full state is elsewhere (:func:`.confirm.confirms`) is doubted there: its samples count as
+        ordinary ones (recurrences) and it is checked again every ``consecutive_attractor_steps`` samples."""
         if key < 0:
             lane.lost += 1
             lane.att_count = 0
@@ -195,9 +200,13 @@ def map_points(problem: Problem, settings: RecurrenceSettings, x0, pars, groups=
                 else:
                     lane.att, lane.att_count = a, 1
                 if lane.att_count >= s.consecutive_attractor_steps:
-                    return a
-                return None
-            lane.att_count = 0
+                    if confirms(problem, found[a].description, x):
+                        return a
+                    lane.doubted, lane.att_count = a, 0
+                if a != lane.doubted:
+                    return None
+            else:
+                lane.att_count, lane.doubted = 0, -1
             if key in lane.visited:
                 lane.recurrences += 1
                 if lane.recurrences >= s.consecutive_recurrences:
@@ -215,7 +224,7 @@ def map_points(problem: Problem, settings: RecurrenceSettings, x0, pars, groups=
             return None
         a = locate_done(lane)
         if a is None:  # rejected: a transient; search again from here
-            lane.mode, lane.visited, lane.recurrences, lane.att, lane.att_count = 0, set(), 0, -1, 0
+            lane.mode, lane.visited, lane.recurrences, lane.att, lane.att_count, lane.doubted = 0, set(), 0, -1, 0, -1
             return None
         return a
 

@@ -34,6 +34,8 @@ class Problem:
        carry points, else the centroid distance in cells; infinite between different kinds).
     7. ``set_points``: how many points describe a periodic or irregular attractor as a set (0: none, compared
        by centroid); the generic :func:`describe` takes them from its samples.
+    8. a description's ``state_points`` (the attractor in the full state; None: not known): where a problem gives
+       them, an assignment by cells holds only if the run's full state is near them (:mod:`.confirm`).
     """
 
     state_names: tuple[str, ...] = ()
@@ -48,6 +50,7 @@ class Problem:
     rejection: int = 0  # set by ``describe`` when it returns None: 1 + index into rejection_reasons (0: none)
     merge_distance: float = 1.5  # cells
     set_points: int = 0  # points of an attractor's set (:mod:`.sets`); 0: attractors compare by centroid
+    state_scale: np.ndarray | None = None  # (n,) typical magnitudes of the states (:mod:`.confirm`; None: ones)
 
     @property
     def representative_names(self) -> tuple[str, ...]:

@@ -188,6 +188,8 @@ class Description:
     # neighbourhood): they replace the cells of the window that found it
     points: np.ndarray | None = None  # (D, M) the attractor as a set in observed coordinates (:mod:`.sets`):
     # one period at equal time steps (periodic), samples of a long run (irregular); None: compared by centroid
+    state_points: np.ndarray | None = None  # (n, M) the attractor in the full state, for grids that observe only
+    # some states (:mod:`.confirm`): the states of ``points`` (periodic, irregular), the equilibrium's state
 
 
 @dataclasses.dataclass

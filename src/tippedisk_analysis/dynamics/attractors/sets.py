@@ -34,16 +34,23 @@ def subsample(observed: np.ndarray, m: int) -> np.ndarray:
     return np.array(observed[:, np.linspace(0, L, m, endpoint=False).astype(int)], dtype=float)
 
 
-def arc_subsample(grid: Grid, observed: np.ndarray, m: int) -> np.ndarray:
-    """m of the samples ``observed`` (D, L) of a closed orbit (dense, one period) at about equal arc length in cell
-    units: two samplings of one orbit then differ by little more than a cell also where it jumps fast."""
+def arc_indices(grid: Grid, observed: np.ndarray, m: int) -> np.ndarray:
+    """Indices of m of the samples ``observed`` (D, L) of a closed orbit (dense, one period) at about equal arc
+    length in cell units."""
     step = np.sqrt(np.sum(grid.difference(np.roll(observed, -1, axis=1), observed) ** 2, axis=0))
     arc = np.concatenate([[0.0], np.cumsum(step[:-1])])
     perimeter = arc[-1] + step[-1]
+    L = observed.shape[1]
     if not perimeter > 0:
-        return subsample(observed, m)
+        return np.linspace(0, L, m, endpoint=False).astype(int)
     index = np.searchsorted(arc, np.linspace(0.0, perimeter, m, endpoint=False), side="right") - 1
-    return np.array(observed[:, np.clip(index, 0, observed.shape[1] - 1)], dtype=float)
+    return np.clip(index, 0, L - 1)
+
+
+def arc_subsample(grid: Grid, observed: np.ndarray, m: int) -> np.ndarray:
+    """m of the samples ``observed`` (D, L) of a closed orbit (dense, one period) at about equal arc length in cell
+    units: two samplings of one orbit then differ by little more than a cell also where it jumps fast."""
+    return np.array(observed[:, arc_indices(grid, observed, m)], dtype=float)
 
 
 def curve_gap(grid: Grid, a: np.ndarray, b: np.ndarray) -> float:

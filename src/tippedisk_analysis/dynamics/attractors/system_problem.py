@@ -31,10 +31,11 @@ from ..lyapunov import spectrum
 from ..orbits import find_orbit
 from ..system import System
 from . import conservative
+from .confirm import is_projection
 from .mapping import map_points
 from .problem import Problem, circular_mean, closest_return, describe, equilibrium_description
 from .records import BASE_KINDS, Candidate, Description, Grid, RecurrenceSettings
-from .sets import arc_subsample, points_of, set_names, subsample
+from .sets import arc_indices, points_of, set_names
 from .tables import assemble_table, chunk_result, column_names
 
 TOL = 1e-10  # Taylor tolerance of the runs: classifications, not trajectories to round-off
@@ -67,6 +68,8 @@ class SystemProblem(Problem):
             if name not in system.state_names and name not in system.observables:
                 raise ParameterError(f"grid coordinate {name!r} is neither a state nor an observable of "
                                      f"{system.name} ({', '.join((*system.state_names, *system.observables))})")
+        self.state_scale = system.state_scale
+        self.projection = is_projection(self)  # descriptions carry state_points (:mod:`.confirm`)
 
     def describe(self, candidate: Candidate, core) -> Description | None:
         """The generic description (:func:`.problem.describe`), each kind verified by a criterion of its own
@@ -123,15 +126,21 @@ class SystemProblem(Problem):
         if not self._not_contracting(states[:, -1], candidate.pars, max(s.horizon, times[-1])):
             return None
         spread = 0.5 * np.ptp(self.grid.unwrap(observed), axis=1) * self.grid.widths  # the long run's, not the window's
+        index = np.linspace(0, observed.shape[1], self.set_points, endpoint=False).astype(int)
         return dataclasses.replace(desc, centroid=circular_mean(self.grid, observed), spread=spread,
-                                   points=subsample(observed, self.set_points))
+                                   points=observed[:, index], state_points=self._state_points(states[:, index]))
+
+    def _state_points(self, states) -> np.ndarray | None:
+        """``states`` (n, M) as a description's state_points where the grid is a projection, else None."""
+        return np.array(states, dtype=float) if self.projection else None
 
     def _with_neighbourhood(self, desc: Description, observed) -> Description:
         """An equilibrium with the cells of the samples ``observed`` (D, L) within NEIGHBOURHOOD cells of it as
         its cells (a run through the window's earlier cells, e.g. past a saddle, is not yet in its basin)."""
         near = np.max(np.abs(self.grid.difference(observed, desc.centroid[:, None])), axis=0) <= NEIGHBOURHOOD
         keys = self.grid.keys(np.concatenate([desc.centroid[:, None], observed[:, near]], axis=1))
-        return dataclasses.replace(desc, cells=tuple(int(k) for k in np.unique(keys[keys >= 0])))
+        return dataclasses.replace(desc, cells=tuple(int(k) for k in np.unique(keys[keys >= 0])),
+                                   state_points=self._state_points(np.asarray(desc.representative)[:, None]))
 
     def _reject(self, reason: str) -> None:
         self.rejection = 1 + self.rejection_reasons.index(reason)
@@ -210,6 +219,8 @@ class SystemProblem(Problem):
             return None
         observed = self.observe(orbit.samples.T, pars)
         dense = self._one_period(orbit.states[0], float(orbit.period), pars)
+        dense_observed = self.observe(dense, pars)
+        index = arc_indices(self.grid, dense_observed, self.set_points)
         unwrapped = self.grid.unwrap(observed)
         keys = self.grid.keys(observed)
         k = self.amplitude_index
@@ -217,7 +228,7 @@ class SystemProblem(Problem):
                            0.5 * np.ptp(unwrapped, axis=1) * self.grid.widths,
                            0.5 * float(np.ptp(unwrapped[k])) * self.grid.widths[k], float(orbit.period),
                            cells=tuple(int(c) for c in np.unique(keys[keys >= 0])),
-                           points=arc_subsample(self.grid, self.observe(dense, pars), self.set_points))
+                           points=dense_observed[:, index], state_points=self._state_points(dense[:, index]))
 
     def _one_period(self, state, period: float, pars) -> np.ndarray:
         """(n, DENSE_SAMPLES) states of the orbit through ``state`` at equal time steps over one ``period``."""
