@@ -133,48 +133,51 @@ def hopf_curves(quick: bool) -> dict:
 
 
 def mechanism_figure(threshold: float, curves: dict, path: Path) -> None:
-    """(C3) against ODE Model 1's eigenvalues; the Hopf curves in (Omega, eps) ending at the closed form; two runs
-    either side of the threshold in (z_S, alpha_dot)."""
-    fig, ax = plt.subplots(1, 3, figsize=(17, 4.8), constrained_layout=True)
-    found = cs.omega_critical()
-    omega_c = found.omega_critical
-    grid = np.linspace(15.0, 60.0, 400)
-    lines = np.array([[cs.rates(w)[k] for k in ("rate_nutation", "rate_precession")] for w in grid])
-    ax[0].plot(grid, lines[:, 0], label="nutation, closed form (C3)")
-    ax[0].plot(grid, lines[:, 1], label="precession, closed form (C3)")
-    marks = np.linspace(17.0, 58.0, 24)
-    full = np.array([full_model_rate(w, 0.01) for w in marks])
-    ax[0].plot(marks, full[:, 0], "o", ms=4, color="C0", label=r"ODE Model 1, $\varepsilon$ = 0.01 m/s")
-    ax[0].plot(marks, full[:, 1], "o", ms=4, color="C1")
-    ax[0].axhline(0.0, color="k", lw=0.8)
-    ax[0].axvline(omega_c, color="k", ls=":", label=rf"$\omega_c$ = {omega_c:.2f} rad/s (C4)")
-    ax[0].set(xlabel=r"spin $\Omega$ of the inverted disk [rad/s]", ylabel=r"Re $\lambda$ / $\varepsilon$ [1/m]",
-              ylim=(-60, 40), title="inverted spin: friction damps the nutation above omega_c")
-    for (label, curve), color in zip(curves.items(), ("C0", "C1")):
-        pair = "nutation" if label == "HOPF1" else "precession"
-        ax[1].semilogy(curve.omega.values, curve.eps.values, color=color, label=f"{label} of ODE Model 1 ({pair})")
-    for value, color, name in ((omega_c, "C0", r"$\omega_c$ (C4)"),
-                               (found.omega_precession, "C1", "precession turns (C3)")):
-        ax[1].axvline(value, color=color, ls=":", label=f"{name}: {value:.3f} rad/s")
-    ax[1].set(xlabel=r"spin $\Omega$ [rad/s]", ylabel=r"$\varepsilon$ [m/s]", xlim=(24, 46),
-              title="Hopf curves, continued to small eps, end at the closed form")
-    system = inversion.system("smooth")
-    flow = dy.Flow(system)
-    setup, disk = td.Setup(), td.Disk()
-    pars = inversion.parameters("smooth", setup)
-    for spin, style in ((threshold - 0.05, "C3"), (threshold + 0.05, "C2")):
-        run = inversion.outcome(spin)
-        t_end = run.time + 2.0 if run.status == "inverted" else 40.0
-        times = np.linspace(0.0, t_end, 8001)
-        states = flow.trajectory(inversion.start_state("smooth", spin, setup, td.InitialState().gamma), times, pars)
-        obs = system.observe(states.T, pars)
-        ax[2].plot((obs["z_S"] - disk.r) / disk.e, obs["alpha_dot"], color=style, lw=0.5,
-                   label=f"{spin:.2f} rad/s: {run.status} at {run.time:.1f} s")
-    ax[2].axhline(omega_c, color="k", ls=":", label=r"$\omega_c$")
-    ax[2].axvline(inversion.INVERSION_HEIGHT, color="grey", ls="--", label="criterion z_S = r + 0.8 e")
-    ax[2].set(xlabel="(z_S - r) / e", ylabel=r"$\dot\alpha$ [rad/s]", xlim=(-1.05, 1.05), ylim=(20, 45),
-              title=r"ODE Model 1, $\varepsilon$ = 0.1 m/s, either side of the threshold")
-    finish(fig, ax, path)
+    """Stacked: (C3) against ODE Model 1's eigenvalues; the Hopf curves in (Omega, eps) ending at the closed form;
+    two runs either side of the threshold in (z_S, alpha_dot)."""
+    rate = r"[rad s$^{-1}$]"
+    with plt.rc_context({"font.size": 11, "legend.fontsize": 9.5}):
+        fig, ax = plt.subplots(3, 1, figsize=(8.5, 12), constrained_layout=True)
+        found = cs.omega_critical()
+        omega_c = found.omega_critical
+        grid = np.linspace(15.0, 60.0, 400)
+        lines = np.array([[cs.rates(w)[k] for k in ("rate_nutation", "rate_precession")] for w in grid])
+        ax[0].plot(grid, lines[:, 0], label="nutation, closed form (C3)")
+        ax[0].plot(grid, lines[:, 1], label="precession, closed form (C3)")
+        marks = np.linspace(17.0, 58.0, 24)
+        full = np.array([full_model_rate(w, 0.01) for w in marks])
+        ax[0].plot(marks, full[:, 0], "o", ms=4, color="C0", label=r"ODE Model 1, $\varepsilon$ = 0.01 m s$^{-1}$")
+        ax[0].plot(marks, full[:, 1], "o", ms=4, color="C1")
+        ax[0].axhline(0.0, color="k", lw=0.8)
+        ax[0].axvline(omega_c, color="k", ls=":", label=rf"$\omega_c$ = {omega_c:.2f} rad s$^{{-1}}$ (C4)")
+        ax[0].set(xlabel=rf"spin $\Omega$ of the inverted disk {rate}",
+                  ylabel=r"$\mathrm{Re}\,\lambda/\varepsilon$ [m$^{-1}$]", ylim=(-60, 40),
+                  title=r"the inverted spin: friction damps the nutation above $\omega_c$")
+        for (label, curve), color in zip(curves.items(), ("C0", "C1")):
+            pair = "nutation" if label == "HOPF1" else "precession"
+            ax[1].semilogy(curve.omega.values, curve.eps.values, color=color, label=f"{label} of ODE Model 1 ({pair})")
+        for value, color, name in ((omega_c, "C0", r"$\omega_c$ (C4)"),
+                                   (found.omega_precession, "C1", "precession turns (C3)")):
+            ax[1].axvline(value, color=color, ls=":", label=f"{name}: {value:.3f} rad s$^{{-1}}$")
+        ax[1].set(xlabel=rf"spin $\Omega$ {rate}", ylabel=r"$\varepsilon$ [m s$^{-1}$]", xlim=(24, 46),
+                  title=r"the Hopf curves, continued to small $\varepsilon$, end at the closed form")
+        system = inversion.system("smooth")
+        flow = dy.Flow(system)
+        setup, disk = td.Setup(), td.Disk()
+        pars = inversion.parameters("smooth", setup)
+        for spin, style in ((threshold - 0.05, "C3"), (threshold + 0.05, "C2")):
+            run = inversion.outcome(spin)
+            t_end = run.time + 2.0 if run.status == "inverted" else 40.0
+            times = np.linspace(0.0, t_end, 8001)
+            states = flow.trajectory(inversion.start_state("smooth", spin, setup, td.InitialState().gamma), times, pars)
+            obs = system.observe(states.T, pars)
+            ax[2].plot((obs["z_S"] - disk.r) / disk.e, obs["alpha_dot"], color=style, lw=0.5,
+                       label=f"{spin:.2f} rad s$^{{-1}}$: {run.status.replace('_', ' ')} at {run.time:.1f} s")
+        ax[2].axhline(omega_c, color="k", ls=":", label=r"$\omega_c$")
+        ax[2].axvline(inversion.INVERSION_HEIGHT, color="grey", ls="--", label=r"criterion $z_S = r + 0.8e$")
+        ax[2].set(xlabel=r"$(z_S - r)/e$", ylabel=rf"$\dot\alpha$ {rate}", xlim=(-1.05, 1.05), ylim=(20, 45),
+                  title=r"ODE Model 1, $\varepsilon$ = 0.1 m s$^{-1}$, either side of the threshold")
+        finish(fig, ax, path, fontsize=9.5)
 
 
 def main(output_dir: str = "output", quick: bool = False) -> Path:

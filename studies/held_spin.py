@@ -83,47 +83,69 @@ def closed_form(name: str, values) -> np.ndarray:
     return np.array([cs.omega_critical(dataclasses.replace(disk, **{name: float(v)})).omega_critical for v in values])
 
 
+READABLE = {"font.size": 11, "legend.fontsize": 9.5}  # stacked panels 8.5 in wide: text as large as the page's
+RATE = r"[rad s$^{-1}$]"
+
+
 def curves_figure(found: dict, saddle, path: Path) -> None:
-    fig, ax = plt.subplots(1, 3, figsize=(17, 4.8), constrained_layout=True)
-    ax[0].plot(saddle.e.values * 1e3, saddle.spin.values, "C3",
-               label="BP1 of the held model: the inverted spin turns into a saddle")
-    marks = np.linspace(saddle.e.values.min(), saddle.e.values.max(), 10)
-    ax[0].plot(marks * 1e3, [cs.saddle_spins(td.Disk(e=float(v)))[0] for v in marks], "ks", ms=4, mfc="none",
-               label="closed form c0 = 0 (C6)")
-    units = {"e": ("eccentricity e [mm]", 1e3), "r": ("radius r [mm]", 1e3), "mu": (r"friction coefficient $\mu$", 1.0)}
-    for a, (name, curve) in zip(ax, found.items()):
-        label, scale = units[name]
-        a.plot(curve[name].values * scale, curve.spin.values, "C0",
-               label=f"HOPF2 of the held model, eps {BRANCH_EPS:g}")
-        marks = np.linspace(curve[name].values.min(), curve[name].values.max(), 12)
-        a.plot(marks * scale, closed_form(name, marks), "ko", ms=4, mfc="none", label=r"closed form $\omega_c$ (C4)")
-        for i, lab in zip(curve.special_index.values, curve.special_label.values):
-            a.plot(curve[name].values[i] * scale, curve.spin.values[i], "kD")
-            a.annotate(str(lab), (curve[name].values[i] * scale, curve.spin.values[i]), textcoords="offset points",
-                       xytext=(5, -10), fontsize=8)
-        a.set(xlabel=label, ylabel="critical spin [rad/s]", title=f"the critical spin over {name}")
-    ax[0].set(title="the damped window over e: from HOPF2 (omega_c) up to BP1 (the saddle)")
-    finish(fig, ax, path)
+    """The damped window over e (HOPF2 up to BP1) above the critical spin over r and over mu, each against its
+    closed form."""
+    with plt.rc_context(READABLE):
+        fig, ax = plt.subplots(3, 1, figsize=(8.5, 11), constrained_layout=True)
+        ax[0].plot(saddle.e.values * 1e3, saddle.spin.values, "C3", label="BP1: the inverted spin turns into a saddle")
+        marks = np.linspace(saddle.e.values.min(), saddle.e.values.max(), 10)
+        ax[0].plot(marks * 1e3, [cs.saddle_spins(td.Disk(e=float(v)))[0] for v in marks], "ks", ms=4, mfc="none",
+                   label=r"closed form $c_0 = 0$ (C6)")
+        units = {"e": (r"eccentricity $e$ [mm]", 1e3), "r": (r"radius $r$ [mm]", 1e3),
+                 "mu": (r"friction coefficient $\mu$", 1.0)}
+        titles = {"e": r"the damped window over $e$: from HOPF2 ($\omega_c$) up to BP1 (the saddle)",
+                  "r": r"the critical spin over $r$", "mu": r"the critical spin over $\mu$"}
+        for a, (name, curve) in zip(ax, found.items()):
+            label, scale = units[name]
+            a.plot(curve[name].values * scale, curve.spin.values, "C0",
+                   label=rf"HOPF2 of the held model, $\varepsilon$ = {BRANCH_EPS:g} m s$^{{-1}}$")
+            marks = np.linspace(curve[name].values.min(), curve[name].values.max(), 12)
+            a.plot(marks * scale, closed_form(name, marks), "ko", ms=4, mfc="none", label=r"closed form $\omega_c$ (C4)")
+            for i, lab in zip(curve.special_index.values, curve.special_label.values):
+                a.plot(curve[name].values[i] * scale, curve.spin.values[i], "kD")
+                a.annotate(str(lab), (curve[name].values[i] * scale, curve.spin.values[i]), textcoords="offset points",
+                           xytext=(5, -12))
+            a.set(xlabel=label, ylabel=f"critical spin {RATE}", title=titles[name])
+            a.ticklabel_format(axis="y", useOffset=False)
+        finish(fig, ax, path, fontsize=READABLE["legend.fontsize"])
 
 
 def figure(br, ds, path: Path) -> None:
-    fig, ax = plt.subplots(1, 3, figsize=(17, 4.8), constrained_layout=True)
-    found = cs.omega_critical()
+    """Stacked: the real parts along the held branch against (C3); how each run from Table 3's start ends over the
+    held spin; the height of S in two runs either side of the threshold."""
+    with plt.rc_context(READABLE):
+        fig, ax = plt.subplots(3, 1, figsize=(8.5, 12), constrained_layout=True)
+        _branch_panel(ax[0], br)
+        _runs_panel(ax[1], ds)
+        _heights_panel(ax[2], ds)
+        finish(fig, ax, path, fontsize=READABLE["legend.fontsize"])
+
+
+def _branch_panel(a, br) -> None:
     eps = float(br.eps.values[0])
     order = np.argsort(np.abs(br.eig_imag.values), axis=1)  # per point: nutation pair first, then precession
     real = np.take_along_axis(br.eig_real.values, order, axis=1)
-    ax[0].plot(br.spin.values, real[:, 0] / eps, "C0", label="nutation, held model")
-    ax[0].plot(br.spin.values, real[:, 2] / eps, "C1", label="precession, held model")
+    a.plot(br.spin.values, real[:, 0] / eps, "C0", label="nutation, held model")
+    a.plot(br.spin.values, real[:, 2] / eps, "C1", label="precession, held model")
     grid = np.linspace(*SPINS, 200)
     lines = np.array([[cs.rates(w)[k] for k in ("rate_nutation", "rate_precession")] for w in grid])
-    ax[0].plot(grid, lines[:, 0], "k:", lw=1, label="closed form (C3)")
-    ax[0].plot(grid, lines[:, 1], "k:", lw=1)
+    a.plot(grid, lines[:, 0], "k:", lw=1, label="closed form (C3)")
+    a.plot(grid, lines[:, 1], "k:", lw=1)
     for i, label in zip(br.special_index.values, br.special_label.values):
-        ax[0].plot(br.spin.values[i], 0.0, "kD", ms=5)
-        ax[0].annotate(str(label), (br.spin.values[i], 0.0), textcoords="offset points", xytext=(4, 6), fontsize=8)
-    ax[0].axhline(0.0, color="k", lw=0.8)
-    ax[0].set(xlabel="held spin [rad/s]", ylabel=r"Re $\lambda$ / $\varepsilon$ [1/m]", ylim=(-60, 40),
-              title=rf"inverted spin, held, $\varepsilon$ = {eps:g} m/s")
+        a.plot(br.spin.values[i], 0.0, "kD", ms=5)
+        a.annotate(str(label), (br.spin.values[i], 0.0), textcoords="offset points", xytext=(4, 6))
+    a.axhline(0.0, color="k", lw=0.8)
+    a.set(xlabel=f"held spin {RATE}", ylabel=r"$\mathrm{Re}\,\lambda/\varepsilon$ [m$^{-1}$]", ylim=(-60, 40),
+          title=rf"the inverted spin, held, $\varepsilon$ = {eps:g} m s$^{{-1}}$")
+
+
+def _runs_panel(a, ds) -> None:
+    found = cs.omega_critical()
     for i, eps_i in enumerate(ds.eps.values):
         n = int((ds.run_outcome.values[i] >= 0).sum())
         spins, times = ds.run_spin.values[i, :n], ds.run_time.values[i, :n]
@@ -131,11 +153,14 @@ def figure(br, ds, path: Path) -> None:
         for status, (marker, color) in STATUS_STYLE.items():
             pick = np.array([o == status for o in outcomes])
             if pick.any():
-                ax[1].semilogy(spins[pick], times[pick], marker, color=color, mfc="none" if i else color,
-                               label=f"{status}, eps {eps_i:g}")
-    ax[1].axvline(found.omega_critical, color="k", ls=":", label=rf"$\omega_c$ = {found.omega_critical:.2f}")
-    ax[1].set(xlabel="held spin [rad/s]", ylabel="time the run ended [s]",
-              title="Table 3's start at a held spin: how each run ends")
+                a.semilogy(spins[pick], times[pick], marker, color=color, mfc="none" if i else color,
+                           label=rf"{status.replace('_', ' ')}, $\varepsilon$ = {eps_i:g} m s$^{{-1}}$")
+    a.axvline(found.omega_critical, color="k", ls=":", label=rf"$\omega_c$ = {found.omega_critical:.2f} rad s$^{{-1}}$")
+    a.set(xlabel=f"held spin {RATE}", ylabel="time the run ended [s]",
+          title="Table 3's start at a held spin: how each run ends")
+
+
+def _heights_panel(a, ds) -> None:
     system, setup = inversion.system("held"), inversion.with_eps(None, BRANCH_EPS)
     flow = dy.Flow(system)
     disk = td.Disk()
@@ -146,12 +171,11 @@ def figure(br, ds, path: Path) -> None:
         pars = inversion.parameters("held", setup, spin)
         states = flow.trajectory(inversion.start_state("held", spin, setup, td.InitialState().gamma), times, pars)
         z_S = system.observe(states.T, pars)["z_S"]
-        ax[2].plot(times, (z_S - disk.r) / disk.e, color=color, lw=0.4,
-                   label=f"held at {spin:.2f} rad/s: {run.status} at {run.time:.1f} s")
-    ax[2].axhline(inversion.INVERSION_HEIGHT, color="grey", ls="--", label="criterion z_S = r + 0.8 e")
-    ax[2].set(xlabel="t [s]", ylabel="(z_S - r) / e", ylim=(-3, 1.2),
-              title=rf"held model, $\varepsilon$ = {BRANCH_EPS:g} m/s, Table 3's start")
-    finish(fig, ax, path, fontsize=7)
+        a.plot(times, (z_S - disk.r) / disk.e, color=color, lw=0.4,
+               label=f"held at {spin:.2f} rad s$^{{-1}}$: {run.status.replace('_', ' ')} at {run.time:.1f} s")
+    a.axhline(inversion.INVERSION_HEIGHT, color="grey", ls="--", label=r"criterion $z_S = r + 0.8e$")
+    a.set(xlabel=r"$t$ [s]", ylabel=r"$(z_S - r)/e$", ylim=(-3, 1.2),
+          title=rf"the held model from Table 3's start, $\varepsilon$ = {BRANCH_EPS:g} m s$^{{-1}}$")
 
 
 def main(output_dir: str = "output", quick: bool = False) -> Path:

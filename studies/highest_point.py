@@ -160,31 +160,39 @@ def disks_dataset(rows: dict, used: dict, path: Path):
     return td.save(ds, path)
 
 
+def _label(tag: str) -> str:
+    """A curve's legend entry: "eps0.01" -> ODE Model 1 at that eps, "slow_..." its slow flow, "drilled_e1.5mm"."""
+    if tag.startswith("drilled"):
+        return rf"drilled disk, $e$ = {tag.removeprefix('drilled_e').removesuffix('mm')} mm, $\varepsilon$ = 0.1 m s$^{{-1}}$"
+    eps = tag.rsplit("eps", 1)[1]
+    return rf"{'slow flow' if tag.startswith('slow') else 'ODE Model 1'}, $\varepsilon$ = {eps} m s$^{{-1}}$"
+
+
 def figure(results: dict, path: Path) -> None:
-    fig, ax = plt.subplots(1, 3, figsize=(16, 5), constrained_layout=True)
-    for tag, (ds, predicted) in results.items():
-        w, h = ds.spin.values, ds.height.values
-        if tag.startswith("drilled"):
-            ax[2].plot(w / predicted, h, ".-", ms=2, lw=0.8, label=f"{tag}, eps 0.1")
-            continue
-        ax[0].plot(w, h, ".-", ms=2, lw=0.8, label=tag)
-        ax[1].semilogy(w, np.maximum(1.0 - h, 1e-12), ".-", ms=2, lw=0.8, label=tag)
-    predicted = next(p for tag, (_ds, p) in results.items() if not tag.startswith("drilled"))
-    for a in ax[:2]:
-        a.axvline(predicted, color="k", ls=":", label="(C5)")
-        a.set_xlabel("initial spin alpha_dot(0) [rad/s]")
-    ax[0].axhline(inversion.INVERSION_HEIGHT, color="grey", ls="--", label="criterion r + 0.8 e")
-    ax[0].set_ylabel("highest (z_S - r) / e")
-    ax[0].set_title("Tables 1-2 disk, Table 3 start")
-    ax[1].axhline(1.0 - inversion.INVERSION_HEIGHT, color="grey", ls="--", label="criterion")
-    ax[1].set_ylabel("1 - highest (z_S - r) / e")
-    ax[1].set_title("the same, its distance from the top")
-    ax[2].axvline(1.0, color="k", ls=":", label="(C5)")
-    ax[2].axhline(inversion.INVERSION_HEIGHT, color="grey", ls="--", label="criterion")
-    ax[2].set_xlabel("initial spin / its (C5)")
-    ax[2].set_ylabel("highest (z_S - r) / e")
-    ax[2].set_title("drilled disks")
-    finish(fig, ax, path)
+    """Stacked: S's highest point over the initial spin (Tables 1-2 disk), its distance from the top, and the
+    drilled disks' over the initial spin scaled by their (C5)."""
+    with plt.rc_context({"font.size": 11, "legend.fontsize": 9.5}):
+        fig, ax = plt.subplots(3, 1, figsize=(8.5, 11.5), constrained_layout=True)
+        for tag, (ds, predicted) in results.items():
+            w, h = ds.spin.values, ds.height.values
+            if tag.startswith("drilled"):
+                ax[2].plot(w / predicted, h, ".-", ms=2, lw=0.8, label=_label(tag))
+                continue
+            ax[0].plot(w, h, ".-", ms=2, lw=0.8, label=_label(tag))
+            ax[1].semilogy(w, np.maximum(1.0 - h, 1e-12), ".-", ms=2, lw=0.8, label=_label(tag))
+        predicted = next(p for tag, (_ds, p) in results.items() if not tag.startswith("drilled"))
+        height = r"highest $(z_S - r)/e$"
+        for a in ax[:2]:
+            a.axvline(predicted, color="k", ls=":", label="closed form (C5)")
+            a.set_xlabel(r"initial spin $\dot\alpha(0)$ [rad s$^{-1}$]")
+        ax[0].axhline(inversion.INVERSION_HEIGHT, color="grey", ls="--", label=r"criterion $z_S = r + 0.8e$")
+        ax[0].set(ylabel=height, title="the Tables 1-2 disk from Table 3's start")
+        ax[1].axhline(1.0 - inversion.INVERSION_HEIGHT, color="grey", ls="--", label="criterion")
+        ax[1].set(ylabel=f"1 $-$ {height}", title="the same: its distance from the top")
+        ax[2].axvline(1.0, color="k", ls=":", label="closed form (C5)")
+        ax[2].axhline(inversion.INVERSION_HEIGHT, color="grey", ls="--", label="criterion")
+        ax[2].set(xlabel=r"initial spin / its closed form (C5)", ylabel=height, title="drilled disks")
+        finish(fig, ax, path, fontsize=9.5)
 
 
 def main(output_dir: str = "output", quick: bool = False) -> Path:
