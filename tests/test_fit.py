@@ -215,9 +215,47 @@ def test_disk_recovers_mu_and_eps_from_a_camera_record(table3_record):
     check_finite(ds)
 
 
-def test_disk_models_without_sensitivities_are_refused():
-    with pytest.raises(ParameterError, match="cannot be fitted: a fit needs the variational equations"):
-        td.fit(np.linspace(0, 1, 11), {"beta": np.ones(11)}, ["mu"], model="m6")
+def test_a_moreau_fit_frees_parameters_only():
+    with pytest.raises(ParameterError, match="frees parameters only; 'alpha_dot' is not one"):
+        td.fit(np.linspace(0, 1, 11), {"beta": np.ones(11)}, ["mu", "alpha_dot"], model="m6")
+
+
+@pytest.fixture(scope="module")
+def coulomb_record():
+    """Model 1 (Moreau, Coulomb, mu = 0.3): gamma and beta at 100 Hz over 1 s, noise 0.01 rad."""
+    from tippedisk_analysis.parameters import Friction, Setup
+
+    truth = td.simulate("moreau-coulomb-euler", 1.0, setup=Setup(friction=Friction(mu=0.3)))
+    t = np.arange(101) * 0.01
+    rng = np.random.default_rng(1)
+    return t, {k: np.interp(t, truth.time.values, truth[k].values) + NOISE * rng.normal(size=t.size)
+               for k in ("gamma", "beta")}
+
+
+def test_a_set_valued_model_is_fitted_by_finite_differences_on_its_simulation(coulomb_record):
+    from tippedisk_analysis.parameters import Friction, Setup
+
+    t, record = coulomb_record
+    ds = td.fit(t, record, ["mu"], model="m1", setup=Setup(friction=Friction(mu=0.25)))
+    assert ds.attrs["status"] == "completed", ds.attrs["message"]
+    assert abs(ds.estimate.values[0] - 0.3) < 2 * ds.stderr.values[0] < 0.01
+    assert ds.attrs["model"] == "moreau-coulomb-euler" and ds.attrs["jacobian"] == "finite differences"
+    rms = np.sqrt(np.mean(ds.gamma_residual.values ** 2))
+    assert 0.8 * NOISE < rms < 1.2 * NOISE
+    check_finite(ds)
+
+
+@pytest.mark.slow  # two fits by simulation: ~12 s
+def test_the_set_valued_law_that_made_the_record_wins_over_another(coulomb_record):
+    """The Coulomb record: Model 1 beats Coulomb-Contensou (Moreau) by AIC."""
+    from tippedisk_analysis.parameters import Friction, Setup
+
+    t, record = coulomb_record
+    start = Setup(friction=Friction(mu=0.25))
+    coulomb = td.fit(t, record, ["mu"], model="m1", setup=start)
+    contensou = td.fit(t, record, ["mu"], model="moreau-contensou-euler", setup=start)
+    table = td.compare_fits([contensou, coulomb])
+    assert table.attrs["best_model"] == "moreau-coulomb-euler" and table.delta_aic.values[0] > 10
 
 
 def _write_csv(path, header, rows):
@@ -248,7 +286,8 @@ def test_cli_fit_json_is_the_only_stdout(table3_record, tmp_path, capsys):
     ("time,theta", [(0, 1), (0.1, 1), (0.2, 1), (0.3, 1)], [], "no state or observable 'theta'"),
     ("time,beta,gamma", [(0, 1, ""), (0.1, 1, ""), (0.2, 1, ""), (0.3, 1, "")], [], "'gamma' holds no finite value"),
     ("time,beta", [(0, 1), (0.1, 1)], [], "2 observed samples for 2 free values"),
-    ("time,beta", [(0, 1), (0.1, 1), (0.2, 1)], ["--model", "m6"], "--model m6 cannot be fitted"),
+    ("time,beta", [(0, 1), (0.1, 1), (0.2, 1)], ["--model", "m6", "--free", "mu,alpha_dot"],
+     "frees parameters only"),
     ("frame,beta", [(0, 1), (1, 1), (2, 1)], [], "no column 'time'"),
 ])
 def test_cli_bad_data_is_one_line_and_exit_2(tmp_path, capsys, header, rows, extra, match):

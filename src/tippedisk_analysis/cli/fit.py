@@ -16,7 +16,8 @@ from .simulate import INITIAL
 def _arguments(p) -> None:
     p.add_argument("data", help="the record: CSV (header row: time and columns named as the model's states or "
                                 "outputs, e.g. gamma, beta, z_S; empty cells for missing samples) or netCDF")
-    p.add_argument("--model", default="ode-euler", help="ode-euler (default) or ode-quaternion")
+    p.add_argument("--model", default="ode-euler", help="ode-euler (default), ode-quaternion (exact Jacobian) or "
+                                                        "any other model (finite differences, parameters only)")
     p.add_argument("--free", required=True,
                    help="comma-separated names to fit: parameters (mu, eps, e, m, ...) and/or initial states "
                         "(omega_z, beta, ...), e.g. mu,eps")
