@@ -114,13 +114,34 @@ def written(tmp_path_factory):
                                     horizon=400.0, progress=False),
         "generic_poincare": dy.poincare_section(ab, [0.7, 2.7], "u1", 0.8, pars=ab.with_pars(D=0.12), t_end=20.0),
     }
+    generic["generic_fit"], generic["generic_fit_comparison"], generic["fit_moreau"] = _fits()
     for name, ds in generic.items():
         td.save(ds, d / f"{name}.nc")
     return d
 
 
+def _fits():
+    """A fit dataset (with a missing sample) of dy.fit, the table of dy.compare_fits, and td.fit of Model 1 (by
+    finite differences on its simulation) to 0.2 s of its own beta."""
+    import heyoka as hy
+
+    x = hy.make_vars("x")
+    decay = dy.System("decay", (x,), (-hy.par[0] * x,), {"k": 0.8}, units={"k": "s-1"})
+    t = np.linspace(0.0, 2.0, 21)
+    data = np.exp(-t) + 0.01 * np.random.default_rng(0).normal(size=t.size)
+    data[5] = np.nan
+    one = dy.fit(decay, t, {"x": data}, ["k"], state=[1.0])
+    two = dy.fit(decay, t, {"x": data}, ["k", "x"], state=[1.0])
+    t = np.arange(21) * 0.01
+    run = td.simulate("m1", 0.2)
+    moreau = td.fit(t, {"beta": np.interp(t, run.time.values, run.beta.values)}, ["mu"], model="m1",
+                    setup=td.Setup(friction=td.Friction(mu=0.25)))
+    return two, dy.compare_fits([one, two], names=["k", "k and x0"]), moreau
+
+
 @pytest.mark.parametrize("name", [*COMMANDS, "periodic_orbits_rolling", "generic_continuation", "generic_curve",
-                                  "generic_periodic_orbits", "generic_lyapunov", "generic_basins", "generic_poincare"])
+                                  "generic_periodic_orbits", "generic_lyapunov", "generic_basins", "generic_poincare",
+                                  "generic_fit", "generic_fit_comparison", "fit_moreau"])
 def test_every_kind_the_package_writes_passes_the_cf_checker(written, tables, name):
     errors, warnings, findings = cf_check(written / f"{name}.nc", tables)
     assert (errors, warnings) == (0, 0), findings
