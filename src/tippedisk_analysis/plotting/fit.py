@@ -7,6 +7,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 
+from ..results import VARIABLES
 from .labels import axis_label, is_tippedisk, symbol, unit
 from .registry import figure
 
@@ -18,8 +19,19 @@ def observed_names(ds: xr.Dataset) -> list[str]:
     return [str(k)[:-5] for k in ds.data_vars if str(k).endswith("_data") and f"{str(k)[:-5]}_residual" in ds]
 
 
+def _physical(ds: xr.Dataset) -> bool:
+    """The disk's fit (td.fit names its model): physical symbols and SI units; a user's System: names as declared."""
+    return "model" in ds.attrs or is_tippedisk(ds)
+
+
 def _name(ds: xr.Dataset, name: str) -> str:
-    return symbol(name) if is_tippedisk(ds) else name
+    return symbol(name) if _physical(ds) else name
+
+
+def _units(ds: xr.Dataset, name: str) -> str:
+    """Units of an observed series: the package's table for the disk's (rad for angles), else the stored ones."""
+    stored = ds[f"{name}_data"].attrs.get("units", "")
+    return VARIABLES[name][0] if _physical(ds) and name in VARIABLES else stored
 
 
 @figure("fit")
@@ -28,14 +40,14 @@ def fit_figure(ds: xr.Dataset):
     residuals data - fit below with +-rms; right: the correlation matrix of the estimates, each free value's
     estimate +- standard error beneath."""
     names = observed_names(ds)
-    physical = is_tippedisk(ds)
+    physical = _physical(ds)
     t = ds["time"].values
     time_label = axis_label("time", ds["time"].attrs.get("units", "s"), physical)
     fig = plt.figure(figsize=(9, 1.2 + 2.8 * len(names)), constrained_layout=True)
     grid = fig.add_gridspec(2 * len(names), 2, width_ratios=(1.7, 1), height_ratios=[2.2, 1] * len(names))
     first = None
     for j, name in enumerate(names):
-        units = ds[f"{name}_data"].attrs.get("units", "")
+        units = _units(ds, name)
         used = ds[f"{name}_used"].values.astype(bool) if f"{name}_used" in ds else np.ones(t.size, bool)
         ax = fig.add_subplot(grid[2 * j, 0], sharex=first)
         first = first or ax
