@@ -36,6 +36,10 @@ PROCESS_NOTES = re.compile(
     r"|\bnot done\b|\bshared (?:machine|with)\b|\bother sessions\b|\bone attempt\b|\btried by\b",
     re.I)
 RAW_FORMULA = re.compile(r"sqrt\(|\^\s*[-+(0-9A-Za-z{]")
+# Symbols written as plain text: "r + 0.8 e", z_S, P_N, E_tot, "3 pi / 16"
+PLAIN_NOTATION = re.compile(r"\br [+-] (?:\d*\.?\d+ )?e\b|\b(?:z_S|P_N|E_tot|g_N1|omega_c)\b|\d ?(?:π|pi) ?/ ?\d")
+# Pages whose text comes from files outside docs/ (data/README.md, studies/README.md, the Sect. 6 table a study writes)
+INCLUDED_TEXT = {"paper.html", "data_catalogue.html", "studies_analysis.html", "studies_catalogue.html"}
 
 
 def _sources_mtime() -> float:
@@ -105,6 +109,14 @@ def test_formulas_are_typeset_in_prose_and_absent_from_headings(site):
             in_headings[name] = bad
     assert not raw, raw
     assert not in_headings, in_headings
+
+
+def test_symbols_in_prose_are_typeset(site):
+    """A height r + 0.8 e, a force P_N or an angle 3 pi / 16 in the reader's text is math: $r + 0.8e$, $P_N$."""
+    plain = {name: sorted({m.group(0) for m in PLAIN_NOTATION.finditer(prose(body))})
+             for name, body in pages(site).items()
+             if name not in INCLUDED_TEXT and not name.startswith(("_generated/", "changelog", "genindex"))}
+    assert not {name: hits for name, hits in plain.items() if hits}
 
 
 def test_pages_are_of_a_readable_length(site):
