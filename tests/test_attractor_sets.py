@@ -192,3 +192,51 @@ def test_a_volume_test_too_short_for_its_runs_does_not_decide():
                                          at.RecurrenceSettings(horizon=10.0), {"x": (0.3, 2.5, 8)}, [0.0, 1.0],
                                          s.pars, 4)
     assert not volume.conservative and "could not decide" in volume.message
+
+
+PROJECTIONS = {"x, y": dy.Grid(("x", "y"), (-4, -5), (4, 5), (80, 100)),
+               "x, y, u": dy.Grid(("x", "y", "u"), (-4, -5, -1.5), (4, 5, 1.5), (80, 100, 30)),
+               "x, u": dy.Grid(("x", "u"), (-4, -1.5), (4, 1.5), (80, 30))}
+
+
+@pytest.mark.parametrize("name", list(PROJECTIONS))
+def test_forced_duffing_on_a_grid_that_misses_states_assigns_every_start_as_scipy(name):
+    """Grids over (x, y), (x, y, u), (x, u): the two responses cross in the projection. Before: (x, y) gave 0.90 /
+    0.10 (130 of 441 starts wrong), (x, u) one attractor, both `completed`. Now an assignment by cells holds only
+    where the run's full state is near the attractor's (Description.state_points): every start as scipy's run."""
+    axes = {"x": (-3.0, 3.0, 21), "y": (-3.0, 3.0, 21)}
+    ds = dy.basins(forced_duffing(), PROJECTIONS[name], axes, state=[0, 0, 1, 0], horizon=300.0, progress=False)
+    assert ds.attrs["status"] == "completed" and ds.sizes["attractor"] == 2 and ds.attrs["undecided"] == 0
+    large = int(np.argmax(ds.attractor_amplitude.values))
+    np.testing.assert_allclose(ds.attractor_amplitude.values[[large, 1 - large]], [1.09184, 0.42056], atol=3e-4)
+    X, V = np.meshgrid(np.linspace(*axes["x"]), np.linspace(*axes["y"]), indexing="ij")
+    reference = duffing_reference(0.3, 1.34, np.array([X.ravel(), V.ravel()])).reshape(X.shape)
+    np.testing.assert_array_equal(ds.outcome.values == large, reference > 0.75)
+
+
+def test_an_assignment_needs_the_full_state_near_the_attractor_in_each_state_scaled_by_its_width():
+    """The orbit (x, y, u) = (cos s, sin s, cos s) on a grid over (x, y) of 0.1-wide cells: it spans 20 cells, u
+    spans 2, so a cell of u is 2 / 20 = 0.1 wide; at (1, 0, 1) a state with u 0.1 higher passes (gap 1 <= 1.5 plus half
+    a step), 0.3 off fails (gap 3). An equilibrium has no extent: u's width is the finest observed cell (0.1)."""
+    from tippedisk_analysis.dynamics.attractors import confirm
+
+    class Projection(at.Problem):
+        state_names = ("x", "y", "u")
+        grid = at.Grid(("x", "y"), (-2, -2), (2, 2), (40, 40))
+
+    s = np.linspace(0, 2 * math.pi, 128, endpoint=False)
+    orbit = at.Description("periodic", np.zeros(3), np.zeros(2), np.ones(2), 1.0, 2 * math.pi,
+                           points=np.array([np.cos(s), np.sin(s)]),
+                           state_points=np.array([np.cos(s), np.sin(s), np.cos(s)]))
+    widths, _period = confirm.state_widths(Projection(), orbit)
+    np.testing.assert_allclose(widths, [0.1, 0.1, 0.1])
+    on = orbit.state_points[:, 0]  # x = 1, y = 0, u = 1: moving u up moves it away from every point
+    assert confirm.gap(Projection(), orbit, on) == 0.0
+    assert confirm.confirms(Projection(), orbit, on + [0, 0, 0.1])
+    assert not confirm.confirms(Projection(), orbit, on + [0, 0, 0.3])
+    rest = at.Description("equilibrium", np.zeros(3), np.zeros(2), np.zeros(2), state_points=np.zeros((3, 1)))
+    np.testing.assert_allclose(confirm.state_widths(Projection(), rest)[0], [0.1, 0.1, 0.1])
+    assert confirm.confirms(Projection(), rest, [0.05, -0.1, 0.15])
+    assert not confirm.confirms(Projection(), rest, [0.05, -0.1, 0.2])
+    assert confirm.confirms(Projection(), at.Description("equilibrium", np.zeros(3), np.zeros(2), np.zeros(2)),
+                            [0.0, 0.0, 9.0])  # no state_points (a grid over every state): not checked

@@ -65,9 +65,11 @@ def state_widths(problem, desc: Description) -> tuple[np.ndarray, np.ndarray]:
 def _scaled(d: np.ndarray, w: np.ndarray, period: np.ndarray) -> np.ndarray:
     """Differences d (n, ...) in units of w, periodic states the short way round."""
     shape = (-1,) + (1,) * (d.ndim - 1)
-    p = period.reshape(shape)
-    safe = np.where(p > 0, p, 1.0)
-    return np.abs(np.where(p > 0, d - safe * np.round(d / safe), d)) / w.reshape(shape)
+    if np.any(period > 0):
+        p = period.reshape(shape)
+        safe = np.where(p > 0, p, 1.0)
+        d = np.where(p > 0, d - safe * np.round(d / safe), d)
+    return np.abs(d) / w.reshape(shape)
 
 
 def allowance(desc: Description, w: np.ndarray, period: np.ndarray) -> float:
@@ -86,14 +88,25 @@ def gap(problem, desc: Description, state) -> float:
     """gap(x) of the module docstring: the max-norm distance (scaled units) of ``state`` (n,) from the attractor's
     nearest state point."""
     w, period = state_widths(problem, desc)
-    d = _scaled(np.asarray(state, dtype=float)[:, None] - np.asarray(desc.state_points, dtype=float), w, period)
-    return float(d.max(axis=0).min())
+    return _gap(np.asarray(desc.state_points, dtype=float), w, period, state)
+
+
+def _gap(points: np.ndarray, w: np.ndarray, period: np.ndarray, state) -> float:
+    return float(_scaled(np.asarray(state, dtype=float)[:, None] - points, w, period).max(axis=0).min())
+
+
+def criterion(problem, desc: Description):
+    """The test ``state (n,) -> bool`` whether a run there may be assigned to the attractor ``desc``: always where
+    ``desc`` carries no ``state_points`` (a grid observing every state), else gap <= merge_distance + allowance
+    (widths and allowance computed once)."""
+    if desc.state_points is None:
+        return lambda state: True
+    points = np.asarray(desc.state_points, dtype=float)
+    w, period = state_widths(problem, desc)
+    limit = problem.merge_distance + allowance(desc, w, period)
+    return lambda state: _gap(points, w, period, state) <= limit
 
 
 def confirms(problem, desc: Description, state) -> bool:
-    """Whether a run at ``state`` (n,) may be assigned to the attractor ``desc``: always where ``desc`` carries no
-    ``state_points`` (a grid observing every state), else gap <= merge_distance + allowance."""
-    if desc.state_points is None:
-        return True
-    w, period = state_widths(problem, desc)
-    return gap(problem, desc, state) <= problem.merge_distance + allowance(desc, w, period)
+    """:func:`criterion` of ``desc`` applied to ``state``."""
+    return criterion(problem, desc)(state)

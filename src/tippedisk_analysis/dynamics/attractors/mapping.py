@@ -10,7 +10,7 @@ import math
 import numpy as np
 
 from ...errors import ParameterError
-from .confirm import confirms
+from .confirm import criterion
 from .problem import DescribeContext, Problem, _nt_events, _radius, _time_limit, combine
 from .records import DIVERGED, Candidate, FirstTime, Found, RecurrenceSettings
 
@@ -96,7 +96,8 @@ def map_points(problem: Problem, settings: RecurrenceSettings, x0, pars, groups=
     final = np.zeros((n, N))
     final_y = np.zeros((D, N))
     events = {name: np.full(N, np.nan) for name in problem.nt_event_names}
-    tables: dict[int, dict] = {}
+    tables: dict[int, dict] = {}  # group -> {cell: the attractors holding it, the first found first}
+    criteria: dict[int, tuple] = {}  # id(description) -> (description, its confirmation criterion)
     found: list[Found] = []
     lanes = [_Lane() for _ in range(B)]
     queue = iter(range(N))
@@ -136,13 +137,11 @@ def map_points(problem: Problem, settings: RecurrenceSettings, x0, pars, groups=
         cellset = set(int(k) for k in keys[keys >= 0])
         owners: dict[int, int] = {}
         for k in cellset:
-            a = table.get(k)
-            if a is not None:
+            for a in table.get(k, ()):
                 owners[a] = owners.get(a, 0) + 1
-        if owners:
-            a, c = max(owners.items(), key=lambda kv: (kv[1], -kv[0]))
-            # mostly in a known attractor's cells and near it in the full state: assigned (its cells unchanged)
-            if c >= s.overlap * len(cellset) and confirms(problem, found[a].description, lane.buf_x[-1]):
+        # mostly in a known attractor's cells and near it in the full state: assigned (its cells unchanged)
+        for a, c in sorted(owners.items(), key=lambda kv: (-kv[1], kv[0])):
+            if c >= s.overlap * len(cellset) and confirmed(a, lane.buf_x[-1]):
                 return a
         cand = Candidate(g, np.array(lane.buf_t), np.array(lane.buf_x).T, np.array(lane.buf_y).T, keys,
                          pars[:, lane.point].copy())
@@ -159,7 +158,7 @@ def map_points(problem: Problem, settings: RecurrenceSettings, x0, pars, groups=
                 f.cells |= cellset
                 if not desc.transient:
                     for k in cellset:
-                        table.setdefault(k, a)
+                        hold(table, k, a)
                 f.description.radius = _radius(problem.grid, f.cells, f.description.centroid)
                 return a
         desc.radius = max(desc.radius, _radius(problem.grid, cellset, desc.centroid))
@@ -167,8 +166,23 @@ def map_points(problem: Problem, settings: RecurrenceSettings, x0, pars, groups=
         found.append(Found(g, desc, cellset, float(cand.times[-1])))
         if not desc.transient:  # transients stop no other run: their cells may hold an attractor's basin
             for k in cellset:
-                table.setdefault(k, idx)
+                hold(table, k, idx)
         return idx
+
+    def hold(table: dict, k: int, a: int) -> None:
+        """Attractor a holds cell k: the first to hold it, or besides those before where assignments are confirmed in
+        the full state (attractors that cross in a projection share cells)."""
+        held = table.get(k, ())
+        if not held or (a not in held and found[a].description.state_points is not None):
+            table[k] = held + (a,)
+
+    def confirmed(a: int, x) -> bool:
+        """Whether a run at state x may be assigned to attractor a (:func:`.confirm.criterion`, kept per description)."""
+        desc = found[a].description
+        entry = criteria.get(id(desc))
+        if entry is None or entry[0] is not desc:
+            entry = criteria[id(desc)] = (desc, criterion(problem, desc))
+        return entry[1](x)
 
     def escaped(lane: _Lane, x_stop, pars_stop) -> int:
         """The label of a run that became non-finite: ``diverged`` if it was outside the grid on the way (escape to
@@ -181,7 +195,7 @@ def map_points(problem: Problem, settings: RecurrenceSettings, x0, pars, groups=
 
     def step(lane: _Lane, t: float, x, y, key: int):
         """One sample of a run; returns a label when the run is decided, else None. A run in a known attractor's
-        cells whose full state is elsewhere (:func:`.confirm.confirms`) is doubted there: its samples count as
+        cells whose full state is elsewhere (:func:`.confirm.criterion`) is doubted there: its samples count as
         ordinary ones (recurrences) and it is checked again every ``consecutive_attractor_steps`` samples."""
         if key < 0:
             lane.lost += 1
@@ -193,15 +207,17 @@ def map_points(problem: Problem, settings: RecurrenceSettings, x0, pars, groups=
         else:
             lane.lost = 0
         if lane.mode == 0:
-            a = tables.get(int(groups[lane.point]), {}).get(key)
-            if a is not None:
+            held = tables.get(int(groups[lane.point]), {}).get(key, ())
+            if held:
+                a = held[0]
                 if a == lane.att:
                     lane.att_count += 1
                 else:
                     lane.att, lane.att_count = a, 1
                 if lane.att_count >= s.consecutive_attractor_steps:
-                    if confirms(problem, found[a].description, x):
-                        return a
+                    for b in held:  # the first attractor of the cell whose full state is near the run's
+                        if confirmed(b, x):
+                            return b
                     lane.doubted, lane.att_count = a, 0
                 if a != lane.doubted:
                     return None
