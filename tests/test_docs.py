@@ -10,7 +10,7 @@ import pytest
 import xarray as xr
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
-PAGES = ["getting_started.md", "python.md", "continuation.md", "periodic_orbits.md"]  # dynamics*.md: their own test
+PAGES = ["getting_started.md", "python.md", "continuation.md", "periodic_orbits.md", "fitting.md"]  # dynamics*.md: their own test
 BAD = ("failed", "nonfinite", "not_converged", "corrector_failed")
 
 
