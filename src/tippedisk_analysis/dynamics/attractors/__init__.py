@@ -2,7 +2,8 @@
 
 Modules: :mod:`.records` (grid, settings, descriptions), :mod:`.problem` (the contract and the generic
 description), :mod:`.mapping` (the state machine), :mod:`.tables` (merging, matching, columns), :mod:`.sets`
-(attractors compared as sets), :mod:`.system_problem` (the problem of any
+(attractors compared as sets), :mod:`.confirm` (assignments confirmed in the full state where the grid is a
+projection), :mod:`.system_problem` (the problem of any
 :class:`~tippedisk_analysis.dynamics.System` and its basins), :mod:`.conservative` (the volume test: conservative
 flows have no attractors).
 
@@ -16,12 +17,15 @@ method (not from its code), on heyoka batch integrators (SIMD lanes) with lanes 
 State machine of one run (counts are consecutive samples; settings in :class:`RecurrenceSettings`):
 
 1. *search*: a sample in a cell of a known attractor of the same parameter group counts towards
-   ``consecutive_attractor_steps``; reached -> the run is assigned to that attractor (early stop).
+   ``consecutive_attractor_steps``; reached -> the run is assigned to that attractor (early stop), if its full
+   state is near the attractor's (:mod:`.confirm`; checked where descriptions carry ``state_points``, i.e. the
+   grid misses a state); if not, the run is doubted there: those samples count as ordinary ones.
    A sample in a cell this run visited before counts towards ``consecutive_recurrences``; reached ->
    *locate*. A new cell resets that count. Outside the grid for ``consecutive_lost_steps`` samples ->
    ``left_grid``.
 2. *locate*: ``attractor_locate_steps`` more samples are recorded; their cells form the candidate.
-   If most of them (``overlap``) already belong to one known attractor the run is assigned to it.
+   If most of them (``overlap``) already belong to one known attractor (and the last state is near it, as
+   above) the run is assigned to it.
    Otherwise the problem describes the candidate (:meth:`Problem.describe`, by default
    :func:`describe`); a description makes it a new attractor whose cells join the table, ``None``
    rejects it (e.g. the amplitude grows) and the run returns to *search* with its visited cells
@@ -62,7 +66,7 @@ problem describes attractors by points, :attr:`Problem.set_points`; never by cen
 within a threshold, each previous attractor used at most once; unmatched ones get new ids).
 """
 
-from . import sets
+from . import confirm, sets
 from .mapping import MapResult, map_points
 from .problem import (DescribeContext, Problem, circular_mean, combine, converging, describe,
                       equilibrium_description, growing, spreads)
@@ -73,4 +77,4 @@ __all__ = ["BASE_KINDS", "SPECIAL_LABELS", "Candidate", "DescribeContext", "Desc
            "MapResult", "Problem", "RecurrenceSettings", "assemble_table", "chunk_result", "circular_mean",
            "column_names", "combine",
            "converging", "describe", "equilibrium_description", "from_columns", "growing", "map_points", "match",
-           "merge", "sets", "spreads", "to_columns"]
+           "merge", "confirm", "sets", "spreads", "to_columns"]

@@ -443,8 +443,10 @@ def basins(system: System, grid: Grid, axes: dict, *, state=None, pars=None, hor
 
     What to choose:
 
-    * ``grid``: its coordinates must tell the attractors apart (a forced system: its phase, e.g. both u and w of a
-      phase oscillator, else two responses cross in the projection and share cells), its box must hold them (a run
+    * ``grid``: its coordinates should tell the attractors apart (a forced system: its phase, e.g. both u and w of a
+      phase oscillator); where they miss states, attractors that cross in the projection share cells and a run
+      is assigned by cells only where its full state is near the attractor's (:mod:`.confirm`), which costs
+      more runs that locate and describe; its box must hold them (a run
       outside it for ``consecutive_lost_steps`` samples is ``left_grid``), and its cells must be finer than the
       distance between them (two sets closer than ``merge_distance`` = 1.5 cells are one attractor);
     * ``axes``: the starts (n per axis); they need not lie in the grid;
