@@ -48,7 +48,7 @@ __all__ = ["MODELS", "INVERSION_HEIGHT", "Outcome", "Threshold", "horizon", "sys
            "parameters",
            "outcome", "spin_threshold", "with_eps", "threshold_dataset", "Highest", "height_system",
            "highest_point", "highest_points", "highest_points_config", "ReductionCheck", "check_reduction",
-           "run_inputs"]
+           "run_inputs", "check_height"]
 
 MODELS = ("smooth", "slow", "held")
 INVERSION_HEIGHT = 0.8  # z_S > r + 0.8 e: S well above G
@@ -104,12 +104,23 @@ def _base_system(model: str) -> System:
 
 
 @functools.lru_cache(maxsize=None)
-def system(model: str) -> System:
-    """The model's System with the terminal event ``inverted`` (z_S rising through r + 0.8 e) added."""
+def system(model: str, height: float = INVERSION_HEIGHT) -> System:
+    """The model's System with the terminal event ``inverted`` (z_S rising through r + height e; the criterion:
+    height 0.8) added."""
     base = _base_system(model)
     z_S = base.observables["z_S"][0]
     r, e = (hy.par[base.parameter_index(name)] for name in ("r", "e"))
-    return base.with_events(base.name + "_inversion", [Event("inverted", z_S - r - INVERSION_HEIGHT * e, "positive")])
+    name = base.name + "_inversion" + ("" if height == INVERSION_HEIGHT else f"_{height:g}")
+    return base.with_events(name, [Event("inverted", z_S - r - float(height) * e, "positive")])
+
+
+def check_height(height) -> float:
+    """``height`` as a level (z_S - r) / e in (0, 1) that S must pass; a one-line ParameterError otherwise."""
+    height = finite_real(height, "height")
+    if not 0 < height < 1:
+        raise ParameterError(f"height = {height:g}: give the level (z_S - r) / e in (0, 1) that S must pass "
+                             f"(the criterion: {INVERSION_HEIGHT}; the top: 0.99)")
+    return height
 
 
 def _check_model(model: str) -> None:
@@ -176,11 +187,11 @@ def run_inputs(spin, setup: Setup | None, gamma0, horizon_s) -> tuple[float, Set
 
 
 def outcome(spin: float, *, model: str = "smooth", setup: Setup | None = None, gamma0: float | None = None,
-            horizon_s: float | None = None) -> Outcome:
-    """Run ``model`` from Table 3's start at initial spin ``spin`` [rad/s] until it inverts, ends or reaches
-    the horizon (default :func:`horizon` of the setup's eps)."""
+            horizon_s: float | None = None, height: float = INVERSION_HEIGHT) -> Outcome:
+    """Run ``model`` from Table 3's start at initial spin ``spin`` [rad/s] until it inverts (S passes r + height
+    e), ends or reaches the horizon (default :func:`horizon` of the setup's eps)."""
     spin, setup, gamma0, t_end = run_inputs(spin, setup, gamma0, horizon_s)
-    model_system = system(model)
+    model_system = system(model, check_height(height))
     ta = copy.deepcopy(model_system.taylor(TOL, events=True))
     ta.time = 0.0
     ta.state[:] = start_state(model, spin, setup, gamma0)
@@ -198,10 +209,12 @@ def outcome(spin: float, *, model: str = "smooth", setup: Setup | None = None, g
 
 def spin_threshold(*, model: str = "smooth", setup: Setup | None = None, gamma0: float | None = None,
                    bracket: tuple = (20.0, 50.0), scan: int = 13, xtol: float = 1e-3,
-                   horizon_s: float | None = None) -> Threshold:
-    """The initial spin above which Table 3's start inverts (module docstring), for ``model``: ``scan`` spins
-    across ``bracket`` [rad/s] find where the outcome changes, each change is bisected to ``xtol``."""
+                   horizon_s: float | None = None, height: float = INVERSION_HEIGHT) -> Threshold:
+    """The initial spin above which Table 3's start inverts (module docstring; S passes r + height e), for
+    ``model``: ``scan`` spins across ``bracket`` [rad/s] find where the outcome changes, each change is bisected
+    to ``xtol``."""
     _check_model(model)
+    height = check_height(height)
     try:
         low, high = map(float, bracket)
     except (TypeError, ValueError):
@@ -215,7 +228,7 @@ def spin_threshold(*, model: str = "smooth", setup: Setup | None = None, gamma0:
     runs = []
 
     def decide(spin):
-        runs.append(outcome(spin, model=model, setup=setup, gamma0=gamma0, horizon_s=horizon_s))
+        runs.append(outcome(spin, model=model, setup=setup, gamma0=gamma0, horizon_s=horizon_s, height=height))
         return runs[-1].inverted
 
     spins = np.linspace(low, high, int(scan))
