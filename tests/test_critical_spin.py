@@ -248,7 +248,7 @@ def test_command_prints_both_and_json(capsys):
     assert out["initial_spin_threshold"] == pytest.approx(cs.initial_spin_threshold(w_c, Setup(disk=disk)), rel=1e-12)
     assert main(["critical-spin"]) == 0
     text = capsys.readouterr().out
-    assert "omega_c = 30.23" in text and "initial spin threshold >= 32.95" in text
+    assert "omega_c = 30.23" in text and "initial spin threshold (C5) = 32.95" in text
 
 
 def test_simulate_says_how_high_the_prediction_gets_and_whether_the_start_slides(capsys):

@@ -1,5 +1,5 @@
-"""``tippedisk critical-spin``: the critical spin in closed form and the initial spin it predicts
-(docs/inversion.md)."""
+"""``tippedisk critical-spin``: the critical spin in closed form, the initial spin (C5) gives from it, and with
+--simulate the full model's thresholds and (C7), which counts friction's work (docs/inversion.md)."""
 
 from __future__ import annotations
 
@@ -8,6 +8,8 @@ import math
 
 from .common import add_disk, disk_from_args, finite_float
 from .registry import command
+
+TOP = 0.99  # (z_S - r) / e: the level (C7) is compared at
 
 
 def _arguments(p) -> None:
@@ -20,8 +22,9 @@ def _arguments(p) -> None:
                         "the full model's eps, horizon 150 s x max(1, 0.1/eps))")
     p.add_argument("--simulate", action="store_true",
                    help="also find the full model's threshold by bisection (ODE Model 1: seconds to a minute at eps "
-                        "0.1, longer at small eps), how high S gets at the predicted spin, and whether the slow "
-                        "flow holds at the threshold (eps 0.01)")
+                        "0.1, longer at small eps), how high S gets at the predicted spin, whether the slow "
+                        "flow holds at the threshold (eps 0.01), and the spin that reaches the top with friction's "
+                        "work counted (C7, slow flow at eps 0.01) against the full model's threshold for r + 0.99 e")
     p.add_argument("--json", action="store_true",
                    help='print one JSON object: {"omega_critical": ..., "initial_spin_threshold": ..., ...} in rad/s')
     add_disk(p)
@@ -33,7 +36,7 @@ def critical_spin(args) -> int:
     import dataclasses
 
     from ..analysis import critical_spin as cs
-    from ..analysis import inversion
+    from ..analysis import inversion, inversion_energy
     from ..parameters import Friction, InitialState, Setup
 
     friction = {k: v for k, v in (("mu", args.mu), ("eps", args.eps)) if v is not None}
@@ -62,6 +65,13 @@ def critical_spin(args) -> int:
         if out["initial_spin_threshold"]:
             out["height_at_prediction"] = inversion.highest_point(out["initial_spin_threshold"], setup=setup,
                                                                   gamma0=gamma0).height
+        work = inversion_energy.spin_with_friction_work(setup, gamma0)
+        out["initial_spin_with_friction_work"] = work.spin if work.status == "completed" else None
+        out["friction_work"] = work.run.work if work.status == "completed" else None
+        out["friction_work_status"], out["friction_work_message"] = work.status, work.message
+        top = inversion.spin_threshold(setup=setup, gamma0=gamma0, bracket=(low, 2.0 * low), scan=11, xtol=1e-3,
+                                       height=TOP)
+        out["full_model_top_threshold"] = top.spin if top.status == "completed" else None
         if th.status == "completed":
             check = inversion.check_reduction(th.high, setup, gamma0)
             out["reduction_holds"] = check.holds
@@ -82,9 +92,9 @@ def _text(out: dict) -> str:
     else:
         lines = [f"omega_c = {out['omega_critical']:.4f} rad/s: {out['message']} (formula (C4), independent of mu "
                  "and eps)",
-                 f"initial spin threshold >= {out['initial_spin_threshold']:.4f} rad/s for gamma0 = "
-                 f"{out['gamma0']:.4f} rad (C5: the start's rolling energy reaches the inverted spin's at omega_c; "
-                 "friction's losses on the way neglected: a lower bound for starts with S below G)",
+                 f"initial spin threshold (C5) = {out['initial_spin_threshold']:.4f} rad/s for gamma0 = "
+                 f"{out['gamma0']:.4f} rad (the start's rolling energy equals the inverted spin's at omega_c; not a "
+                 "bound: friction's work on the way up and the lenient criterion r + 0.8 e nearly cancel)",
                  f"check: at omega_c the slow flow's Jacobian (heyoka, small eps) gives the nutation a real part "
                  f"{out['check_relative_nutation_rate']:.1e} of the one at {out['check_spin']:.4f} rad/s (0 when the "
                  "formula holds)"]
@@ -105,6 +115,14 @@ def _text(out: dict) -> str:
             lines.append(f"full model (ODE Model 1, eps {out['eps']:g} m/s, mu {out['mu']:g}): inverts above "
                          f"{full:.4f} rad/s, {diff:+.4f} rad/s ({100 * diff / predicted:+.2f} % of the prediction) "
                          "above it")
+        if out.get("initial_spin_with_friction_work") is not None:
+            c7, top = out["initial_spin_with_friction_work"], out["full_model_top_threshold"]
+            versus = (f"; the full model reaches r + {TOP} e above {top:.4f} rad/s ({100 * (c7 / top - 1):+.2f} %)"
+                      if top is not None else f"; the full model's threshold for r + {TOP} e was not found")
+            lines.append(f"with friction's work along the slow flow (C7, {1e3 * out['friction_work']:.4g} mJ): "
+                         f"{c7:.4f} rad/s reaches the top" + versus)
+        elif "friction_work_status" in out:
+            lines.append(f"with friction's work (C7): {out['friction_work_status']}: {out['friction_work_message']}")
         if "height_at_prediction" in out:
             lines.append(f"at the predicted spin S gets to r + {out['height_at_prediction']:.3f} e (the criterion: "
                          "r + 0.8 e; docs/inversion.md, How high S gets)")
