@@ -153,6 +153,19 @@ def test_continuation_in_the_horizon_fits_a_chaotic_record():
     assert "rho and beta are correlated" in ds.attrs["message"]
 
 
+def test_a_horizon_too_short_to_determine_the_values_is_skipped():
+    """The pendulum's first 0.6 s (13 samples) leave c undetermined (linearised standard error 21 times |c|), the
+    first 1.25 s too (2.2 times): the continuation starts at 2.5 s instead of fitting the noise (c < 0 there)."""
+    from tippedisk_analysis.dynamics.fitting import solve
+
+    t, _exact, data = pendulum_record(0)
+    problem = dy.FitProblem(pendulum(), t, {"x": data}, ["c", "k", "x"], state={"x": 1.0, "v": 0.0})
+    stages = solve(problem)
+    assert [s.n_samples for s in stages] == [51, 101, 201]
+    assert all(s.theta[0] > 0 for s in stages)
+    assert np.all(np.abs(stages[-1].theta - [TRUE["c"], TRUE["k"], TRUE["x"]]) < 0.01)
+
+
 @pytest.mark.parametrize("change, match", [
     (dict(times=np.r_[0.0, 0.2, 0.1, np.linspace(0.3, 1, 8)]), "times goes back at sample 2"),
     (dict(times=np.r_[0.0, 0.1, 0.1, np.linspace(0.3, 1, 8)]), "times repeats at sample 2"),
@@ -213,6 +226,25 @@ def test_disk_recovers_mu_and_eps_from_a_camera_record(table3_record):
     assert np.max(np.abs(ds.gamma.values - exact["gamma"])) < 0.01
     assert ds.attrs["model"] == "ode-euler" and '"mu": 0.25' in ds.attrs["start_setup"]
     check_finite(ds)
+
+
+@pytest.mark.slow  # 40 fits of the disk: ~5 s once its variational integrator is compiled
+def test_disk_two_sigma_intervals_cover_mu_and_eps_in_about_95_percent(table3_record):
+    """40 noise draws (0.01 rad) on the 2 s Table 3 record made by scipy's DOP853 (an integrator independent of
+    heyoka's Taylor run the fit uses): mu and eps each lie within 2 stderr of 0.3 and 0.1 in 85-100 % of the fits,
+    the default continuation starting where the record determines them (not at 0.13 s: mu, eps -> 0 there)."""
+    from tippedisk_analysis.parameters import Friction, Setup
+
+    t, exact, _noisy = table3_record
+    start = Setup(friction=Friction(mu=0.25, eps=0.15))
+    hits = np.zeros(2)
+    for seed in range(200, 240):
+        rng = np.random.default_rng(seed)
+        ds = td.fit(t, {k: v + 0.01 * rng.normal(size=t.size) for k, v in exact.items()}, ["mu", "eps"], setup=start)
+        assert ds.attrs["status"] == "completed", ds.attrs["message"]
+        assert int(ds.attrs["horizon_samples"].split()[0]) > 26, ds.attrs["horizon_samples"]
+        hits += np.abs(ds.estimate.values - [0.3, 0.1]) < 2 * ds.stderr.values
+    assert np.all((hits >= 34) & (hits <= 40)), hits
 
 
 def test_a_moreau_fit_frees_parameters_only():

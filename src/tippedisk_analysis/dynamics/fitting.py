@@ -8,6 +8,8 @@ scipy.optimize.least_squares (trust region reflective, bounds) minimises |r|^2 /
 Start: a continuation in the horizon. The fit to the first part of the record (default 1/16, then 1/8, 1/4, 1/2)
 starts the fit to the next part: a motion that rotates, oscillates or inverts has a rugged cost over a long record,
 while over a short one the start lies in the basin of the minimum and each longer fit starts close to its own.
+A part too short to determine the free values (a linearised standard error above a value's magnitude at the start)
+is skipped: its minimum follows the noise (the disk's mu and eps trade off over the first 0.1 s).
 
 Uncertainty at the optimum: cov = s^2 (J^T J)^-1 with s^2 = |r|^2 / (m - p) (m samples, p free values) when sigma
 is not given, s^2 = 1 when it is. The column-scaled Jacobian J D (unit columns) = U S V^T: a singular value below
@@ -272,11 +274,12 @@ def solve(problem: FitProblem, *, bounds=None, horizons=HORIZONS, max_nfev: int 
         N = int(np.searchsorted(t, t[0] + frac * (t[-1] - t[0]), side="right")) if frac < 1 else len(t)
         if problem.used[:N].sum() <= 2 * p and frac < 1:
             continue  # too short a part to say anything; the next horizon starts from the same values
-
         try:
             problem.residuals(theta, N)
         except RunFailed:  # the last horizon's estimate cannot be run over this one: start again from the start
             theta = problem.start
+        if frac < 1 and _undetermined(problem, theta, N):
+            continue  # its minimum would follow the noise (e.g. the disk's mu, eps -> 0 on 0.1 s): start later
 
         def fun(th, N=N):
             try:
@@ -290,6 +293,24 @@ def solve(problem: FitProblem, *, bounds=None, horizons=HORIZONS, max_nfev: int 
         stages.append(Stage(N, res.x, int(res.status), int(res.nfev), int(res.njev or 0),
                             np.asarray(res.active_mask, dtype=int), str(res.message)))
     return stages
+
+
+def _undetermined(problem: FitProblem, theta, N: int) -> bool:
+    """Whether the first ``N`` samples leave a free value undetermined at ``theta``: a linearised standard error
+    s |(J^T J)^-1|_kk^(1/2) (s^2 from these residuals, 1 with sigma) above |theta_k| for a non-zero theta_k, or a
+    Jacobian column or combination without weight."""
+    r, J = problem.residuals(theta, N), problem.jacobian(theta, N)
+    m, p = J.shape
+    norms = np.linalg.norm(J, axis=0)
+    if np.any(norms == 0):
+        return True
+    _U, S, Vt = np.linalg.svd(J / norms, full_matrices=False)
+    if S[-1] <= 1e-12 * S[0]:
+        return True
+    s = 1.0 if problem.sigma_given else float(np.sqrt(r @ r / (m - p)))
+    stderr = s * np.linalg.norm(Vt.T / S, axis=1) / norms
+    theta = np.asarray(theta, dtype=float)
+    return bool(np.any((stderr > np.abs(theta)) & (theta != 0)))
 
 
 def _bounds(problem: FitProblem, bounds) -> tuple[np.ndarray, np.ndarray]:
