@@ -21,6 +21,7 @@ from . import continuation, stability_map, trajectories  # noqa: E402, F401 (reg
 from . import attractors, fit, periodic  # noqa: E402, F401 (registration)
 from .animation import animate  # noqa: E402
 from .registry import FIGURES  # noqa: E402
+from .style import describe  # noqa: E402
 from .simulation import comparison_figure, gap_figure, simulation_figure, stroboscopic_figure  # noqa: E402
 from .stability_map import stability_map_figure  # noqa: E402
 from .trajectories import bifurcation_figure, outcome_map_figure, poincare_figure  # noqa: E402
@@ -42,6 +43,7 @@ def plot_dataset(ds: xr.Dataset, path: str | Path, **options) -> Path:
     ``options`` go to the figure function (e.g. ``observable=`` and ``background=`` of continuation
     figures); an option the kind's figure does not take is refused with DatasetError.
 
+    A PNG records its smallest text and width in its metadata ("Description", :func:`.style.describe`).
     The file is written like every output (:func:`tippedisk_analysis.files.atomic_write`). A dataset
     without samples (e.g. a run that became non-finite at once) is refused with DatasetError.
     """
@@ -66,7 +68,8 @@ def plot_dataset(ds: xr.Dataset, path: str | Path, **options) -> Path:
         plt.close("all")
         raise DatasetError(f"the {kind} dataset lacks {exc}; it is damaged or not one of ours") from None
     try:
-        files.atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=120, format=suffix))
+        metadata = {"Description": describe(fig)} if suffix == "png" else None
+        files.atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=120, format=suffix, metadata=metadata))
     finally:
         plt.close(fig)
     return path

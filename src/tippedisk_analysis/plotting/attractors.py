@@ -10,6 +10,7 @@ from matplotlib.colors import BoundaryNorm, ListedColormap
 
 from .labels import axis_label, is_tippedisk, symbol, unit
 from .registry import figure
+from .style import WIDTH, size
 
 LABEL_COLOURS = {"undecided": "0.75", "left_grid": "0.45", "failed": "black", "diverged": "#8c564b",
                  "fell": "#d62728", "lift_off": "#e377c2"}
@@ -55,7 +56,7 @@ def _class_map(ax, fig, ds: xr.Dataset, da: xr.DataArray, x: str, y: str, title:
     mesh = ax.pcolormesh(ds[x], ds[y], np.asarray(coded).T if da.dims[0] == x else np.asarray(coded),
                          cmap=cmap, norm=norm, shading="nearest")
     cbar = fig.colorbar(mesh, ax=ax, ticks=np.arange(len(values)))
-    cbar.ax.set_yticklabels([_readable(n) for n in names], fontsize=10)
+    cbar.ax.set_yticklabels([_readable(n) for n in names])
     physical = is_tippedisk(ds)
     ax.set(xlabel=axis_label(x, ds[x].attrs.get("units", ""), physical),
            ylabel=axis_label(y, ds[y].attrs.get("units", ""), physical), title=title)
@@ -64,12 +65,13 @@ def _class_map(ax, fig, ds: xr.Dataset, da: xr.DataArray, x: str, y: str, title:
 def _panels(ds: xr.Dataset):
     """A figure with two stacked panels above a text row holding the table of attractors."""
     n = max(ds.sizes.get("attractor", 0), 1)
-    fig = plt.figure(figsize=(8, 8.6 + 0.22 * n), constrained_layout=True)
-    gs = fig.add_gridspec(3, 1, height_ratios=[4, 4, 0.3 + 0.22 * n])
+    fig = plt.figure(figsize=size(2, 3.8, 1.2 + 0.25 * n), constrained_layout=True)
+    gs = fig.add_gridspec(3, 1, height_ratios=[3.8, 3.8, 0.3 + 0.25 * n])
     axes = [fig.add_subplot(gs[0]), fig.add_subplot(gs[1])]
     text = fig.add_subplot(gs[2])
     text.axis("off")
-    text.text(0.0, 1.0, _table_text(ds), fontsize=10, va="top", transform=text.transAxes)
+    table = text.text(0.0, 1.0, _table_text(ds), va="top", transform=text.transAxes, wrap=True)
+    table.set_in_layout(False)  # wrapped at the figure's edge; its unwrapped width would squeeze the panels
     return fig, axes
 
 
@@ -136,12 +138,12 @@ def basins_figure(ds: xr.Dataset):
         axes[1].set(xlabel=x, ylabel=_assignment_label(ds))
     fracs = ", ".join(f"A{i} {100 * float(f):.1f}%" for i, f in enumerate(ds["basin_fraction"].values))
     if "system" in ds.attrs:  # any System
-        fig.suptitle(f"Basins of {ds.attrs['system']} ({ds.attrs.get('system_parameters', '')})\n{fracs}", fontsize=10)
+        fig.suptitle(f"Basins of {ds.attrs['system']} ({ds.attrs.get('system_parameters', '')})\n{fracs}", wrap=True)
         return fig
     fig.suptitle(f"Basins, {ds.attrs.get('paper_model', '')}, "
                  rf"$\varepsilon$ = {ds.attrs.get('eps', float('nan')):g} m/s, "
                  rf"$\mu$ = {ds.attrs.get('mu', float('nan')):g}, horizon {ds.attrs.get('t_end', '')} s "
-                 f"({_fixed(ds.attrs.get('fixed_initial', ''))})\n{fracs}", fontsize=11)
+                 f"({_fixed(ds.attrs.get('fixed_initial', ''))})\n{fracs}", wrap=True)
     return fig
 
 
@@ -162,13 +164,13 @@ def basin_fractions_figure(ds: xr.Dataset):
             layers.append(share)
             labels.append(name)
             cols.append(c)
-    fig, axes = plt.subplots(2, 1, figsize=(8, 8.4), sharex=True, constrained_layout=True)
+    fig, axes = plt.subplots(2, 1, figsize=(WIDTH, 9.5), sharex=True, constrained_layout=True)
     if layers:
         axes[0].stackplot(x, *layers, labels=[_readable(n) for n in labels], colors=cols, alpha=0.9)
     xlabel = axis_label(par, ds[par].attrs.get("units", ""), is_tippedisk(ds))
     axes[0].set(ylabel="share of sampled starts", ylim=(0, 1),
                 title=f"basin fractions (attractors matched across {symbol(par)})")
-    axes[0].legend(fontsize=10, loc="center left", bbox_to_anchor=(1.01, 0.5))
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="outside lower center", ncol=2, frameon=False)
     axes[1].plot(x, ds["inverted_fraction"], "o-", color=KIND_FIRST["equilibrium"],
                  label="stable inverted spin (attractor)")
     wob = [v for v, n in zip(values, names) if v >= 0 and "wobbling_inverted" in n]
@@ -177,9 +179,9 @@ def basin_fractions_figure(ds: xr.Dataset):
         axes[1].plot(x, ds["inverted_fraction"] + transient, "s--", color=KIND_FIRST["wobbling"],
                      label="+ wobbling about the inverted spin\n(transient)")
     axes[1].set(xlabel=xlabel, ylabel="share", ylim=(-0.02, 1.02), title="share of starts that invert")
-    axes[1].legend(fontsize=10, loc="center left", bbox_to_anchor=(1.01, 0.5))
+    axes[1].legend(loc="best")
     fig.suptitle(f"Basin fractions over {symbol(par)}, {ds.sizes['sample']} samples per value, horizon "
-                 f"{ds.attrs.get('t_end', '')} s", fontsize=11)
+                 f"{ds.attrs.get('t_end', '')} s", wrap=True)
     return fig
 
 
@@ -196,5 +198,5 @@ def attractor_outcome_map_figure(ds: xr.Dataset):
     axes[1].set(xlabel=axes[0].get_xlabel(), ylabel=axes[0].get_ylabel(), title="time to decision")
     extra = ", ".join(f"{symbol(d)} = {float(ds[d][0]):g}" for d in dims[2:])
     fig.suptitle(f"Outcome map by attractors, {ds.attrs.get('paper_model', '')}, horizon {ds.attrs.get('t_end', '')} s"
-                 + (f" ({extra})" if extra else ""), fontsize=11)
+                 + (f" ({extra})" if extra else ""), wrap=True)
     return fig

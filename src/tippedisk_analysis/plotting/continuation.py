@@ -10,6 +10,7 @@ from ..errors import DatasetError
 from ..results import config_of
 from . import labels
 from .registry import figure
+from .style import WIDTH, styled
 
 UNITS = {"omega": "rad s-1", "eps": "m s-1", "mu": "1", "e": "m", "inertia": "1"}
 
@@ -44,7 +45,7 @@ def continuation_figure(ds: xr.Dataset, observable: str | None = None, backgroun
     name = parameters[0]
     x = ds[name].values
     y = ds[observable].values
-    fig, axes = plt.subplots(2, 1, figsize=(8, 7), sharex=True, constrained_layout=True)
+    fig, axes = plt.subplots(2, 1, figsize=(WIDTH, 8), sharex=True, constrained_layout=True)
     ax = axes[0]
     stability = ds["stability"].values.copy()
     for i in np.flatnonzero(stability == 1)[::-1]:  # special points (marginal) take the style of the next run
@@ -65,8 +66,8 @@ def continuation_figure(ds: xr.Dataset, observable: str | None = None, backgroun
     for k, (label, index) in enumerate(_specials(ds)):
         for a, yy in ((ax, y[index]), (ax2, 0.0)):
             a.plot(x[index], yy, "o", color="tab:red", ms=5, zorder=3)
-        ax.annotate(label, (x[index], y[index]), textcoords="offset points", xytext=(0, 8 + 11 * (k % 3)),
-                    ha="center", fontsize=10, color="tab:red",
+        ax.annotate(label, (x[index], y[index]), textcoords="offset points", xytext=(0, 8 + 16 * (k % 3)),
+                    ha="center", color="tab:red",
                     arrowprops={"arrowstyle": "-", "color": "tab:red", "lw": 0.5})
     fig.suptitle(_fixed_text(ds, parameters))
     return fig
@@ -83,13 +84,14 @@ def _fixed_text(ds: xr.Dataset, parameters) -> str:
     return "\n".join([f"Continuation{' of ' + system if system else ''}", *lines])
 
 
+@styled
 def curve_figure(curves: list, background=None, ax=None):
     """Two-parameter curves (datasets of one parameter pair) with their codimension-two points; an optional
     stability map (kind stability_map) in the background shows the growth rate of the branch."""
     parameters = curves[0].attrs["parameters"].split()
     own = ax is None
     if own:
-        fig, ax = plt.subplots(figsize=(7.5, 5.5), constrained_layout=True)
+        fig, ax = plt.subplots(figsize=(WIDTH, 5.5), constrained_layout=True)
     else:
         fig = ax.figure
     if background is not None:
@@ -109,11 +111,11 @@ def curve_figure(curves: list, background=None, ax=None):
             color, labelled = line.get_color(), labelled or label is not None
         for label, index in _specials(ds):
             ax.plot(x[index], y[index], "s", color="k", ms=5)
-            ax.annotate(label, (x[index], y[index]), textcoords="offset points", xytext=(5, 4), fontsize=11)
+            ax.annotate(label, (x[index], y[index]), textcoords="offset points", xytext=(5, 4))
     ax.set(xlabel=axis_label(parameters[0], curves[0]), ylabel=axis_label(parameters[1], curves[0]),
            title="Hopf (solid), zero-eigenvalue (dashed), neutral saddle (dotted)" + (
                "\nshaded blue: stable" if background is not None else ""))
-    ax.legend(fontsize=10, loc="best")
+    ax.legend(loc="best")
     if own:
         finite = np.concatenate([np.c_[d[parameters[0]].values, d[parameters[1]].values] for d in curves])
         low, high = np.nanmin(finite[:, 0]), np.nanmax(finite[:, 0])

@@ -13,6 +13,7 @@ from ..results import config_of
 from .labels import STABILITY_STYLE as STYLE
 from .labels import axis_label, ending, is_tippedisk, runs, symbol
 from .registry import figure
+from .style import WIDTH, size, stacked
 
 STATUS_TEXT = {0: "orbit", 1: "equilibrium", 2: "not converged", 3: "non-finite"}
 
@@ -42,7 +43,7 @@ def _multipliers(ax, ds: xr.Dataset, color_by=None) -> None:
     lim = max(1.3, min(np.abs(np.concatenate([re.ravel(), im.ravel()])).max() * 1.1, 4.0))
     largest = float(np.hypot(re, im)[~trivial].max(initial=0.0))
     ax.set(xlim=(-lim, lim), ylim=(-lim, lim), title=rf"Floquet multipliers (largest $|\mu|$ {largest:.3g})")
-    ax.legend(fontsize=9, loc="lower left")
+    ax.legend(loc="lower left")
     if color_by is not None:
         name = ds.attrs.get("parameter", "")
         plt.colorbar(sc, ax=ax, orientation="horizontal", shrink=0.9, label=_label(ds, name))
@@ -64,10 +65,8 @@ def _label(ds: xr.Dataset, name: str) -> str:
 
 
 def _branch_figure(ds: xr.Dataset, name: str):
-    """The branch above its multipliers and orbits (8 in wide: readable at the width of a page)."""
-    fig = plt.figure(figsize=(8, 8.5), constrained_layout=True)
-    grid = fig.add_gridspec(2, 2, height_ratios=[1, 1.25])
-    axes = [fig.add_subplot(grid[0, :]), fig.add_subplot(grid[1, 0]), fig.add_subplot(grid[1, 1])]
+    """The branch above its multipliers and its orbits, stacked."""
+    fig, axes = stacked(3, 3.8, 1.2)
     x, amp = ds[name].values, ds.amplitude.values
     ax = axes[0]
     config = config_of(ds)
@@ -80,11 +79,11 @@ def _branch_figure(ds: xr.Dataset, name: str):
     ax.plot([], [], "--", color="k", label="unstable orbits")
     for label, index in zip(ds.special_label.values, ds.special_index.values):
         ax.plot(x[index], amp[index], "o", color="tab:red", ms=5, zorder=3)
-        ax.annotate(str(label), (x[index], amp[index]), textcoords="offset points", xytext=(4, 6), fontsize=10,
+        ax.annotate(str(label), (x[index], amp[index]), textcoords="offset points", xytext=(4, 6),
                     color="tab:red")
     ax.set(xlabel=_label(ds, name), ylabel=r"amplitude $\max|x - \bar x|$ (scaled)",
            title=f"branch of periodic orbits of {ds.attrs.get('system', '')}")
-    ax.legend(fontsize=9)
+    ax.legend()
     _multipliers(axes[1], ds, color_by=x)
     ax = axes[2]
     i, j = _state_pair(ds)
@@ -96,12 +95,12 @@ def _branch_figure(ds: xr.Dataset, name: str):
                                                    f"$T$ = {float(ds.period[p]):.4g}")
     states = [str(s) for s in ds["state"].values]
     ax.set(xlabel=_label(ds, states[i]), ylabel=_label(ds, states[j]), title="orbits along the branch")
-    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.14))
+    fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center", ncol=2, frameon=False)
     return fig
 
 
 def _search_figure(ds: xr.Dataset):
-    fig, axes = plt.subplots(1, 3, figsize=(14, 4.6), constrained_layout=True)
+    fig, axes = stacked(3, 3.6, 0.6)
     status = ds.orbit_status.values
     ax = axes[0]
     if "return_energy_change" in ds:
@@ -111,7 +110,7 @@ def _search_figure(ds: xr.Dataset):
         ax.semilogy(t, np.where(ds.return_distance.values[:-1] > 0, ds.return_distance.values[:-1], np.nan), ".",
                     ms=2, label="|x_(k+1) - x_k| (scaled)")
         ax.set(xlabel="time of the return [s]", ylabel="J / 1", title="Poincaré returns: no fixed point")
-        ax.legend(fontsize=7)
+        ax.legend()
         ax2 = axes[1]
         ax2.plot(t, ds.return_period.values[:-1], ".-", ms=3)
         ax2.set(xlabel="time of the return [s]", ylabel="return time [s]", title="return times drift")
@@ -122,9 +121,9 @@ def _search_figure(ds: xr.Dataset):
             ax.loglog(r, np.abs(ds.energy_change.values), "s-", label="|energy change| over T [J]")
         ax.loglog(r, ds.residual.values[0] * (r / r[0]) ** 2, ":", color="0.5", label=r"$\propto r^2$")
         for rr, res, s in zip(r, ds.residual.values, status):
-            ax.annotate(STATUS_TEXT[int(s)], (rr, res), textcoords="offset points", xytext=(4, -10), fontsize=7)
+            ax.annotate(STATUS_TEXT[int(s)], (rr, res), textcoords="offset points", xytext=(4, -10))
         ax.set(xlabel="guess radius r", ylabel="residual / J", title="Newton from the Hopf point")
-        ax.legend(fontsize=7)
+        ax.legend()
         _multipliers(axes[1], ds)
         axes[1].set_title("multipliers of the last iterates")
     ax = axes[2]
@@ -134,8 +133,8 @@ def _search_figure(ds: xr.Dataset):
         ax.plot(orbit[:, i], orbit[:, j], lw=1.0, label=f"{STATUS_TEXT[int(status[p])]}, T = {float(ds.period[p]):.4g}")
     states = [str(s) for s in ds["state"].values]
     ax.set(xlabel=states[i], ylabel=states[j], title="last iterate over its period")
-    ax.legend(fontsize=7)
-    fig.suptitle(ds.attrs.get("message", "")[:160], fontsize=8)
+    ax.legend()
+    fig.suptitle(ds.attrs.get("message", "")[:160], wrap=True)
     return fig
 
 
@@ -144,7 +143,7 @@ def lyapunov_figure(ds: xr.Dataset):
     """A run's exponents converging over time, or a map of the largest exponent (flagged runs hatched)."""
     if ds.attrs.get("mode") == "map":
         return _map_figure(ds)
-    fig, ax = plt.subplots(figsize=(8, 5), constrained_layout=True)
+    fig, ax = plt.subplots(figsize=size(1, 5.0), constrained_layout=True)
     t = ds.history_time.values
     for k in range(ds.sizes["exponent"]):
         error = rf" $\pm$ {float(ds.exponent_error[k]):.2g}" if "exponent_error" in ds else ""
@@ -155,12 +154,12 @@ def lyapunov_figure(ds: xr.Dataset):
     ax.set_xscale("log")
     ax.set(xlabel="time since the transient", ylabel="running estimate",
            title=f"Lyapunov spectrum of {ds.attrs.get('system', '')}{ending(ds.attrs.get('status', ''))}")
-    ax.legend(fontsize=7)
+    ax.legend()
     return fig
 
 
 def _map_figure(ds: xr.Dataset):
-    fig, ax = plt.subplots(figsize=(8, 5.5), constrained_layout=True)
+    fig, ax = plt.subplots(figsize=(WIDTH, 5.5), constrained_layout=True)
     lam = ds.max_exponent.transpose("eps", "omega").values
     ok = ds.outcome.transpose("eps", "omega").values == 0
     shown = np.where(ok, lam, np.nan)
@@ -173,6 +172,6 @@ def _map_figure(ds: xr.Dataset):
         ax.pcolor(ds.omega, ds.eps, flagged, hatch="xx", alpha=0.0, shading="nearest")
         ax.pcolormesh(ds.omega, ds.eps, flagged, cmap="Greys", vmin=0, vmax=3, shading="nearest")
     ax.set(xlabel=r"initial spin rate $\Omega$ [rad/s]", ylabel=r"smoothing $\varepsilon$ [m/s]",
-           title=f"largest finite-time Lyapunov exponent, {ds.attrs.get('t_end', '')}-s runs from Table 3 "
+           title=f"largest finite-time Lyapunov exponent, {ds.attrs.get('t_end', '')}-s runs\nfrom Table 3 "
                  "(grey: fell or lifted off)")
     return fig

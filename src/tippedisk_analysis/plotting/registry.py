@@ -4,16 +4,19 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+from .style import styled
+
 FIGURES: dict[str, Callable] = {}
 
 
 def figure(kind: str):
-    """Register the decorated ``function(ds) -> matplotlib Figure`` for datasets of ``kind``."""
+    """Register the decorated ``function(ds) -> matplotlib Figure`` for datasets of ``kind``; it draws in the
+    page's style (:func:`.style.styled`)."""
 
     def register(function: Callable) -> Callable:
         if kind in FIGURES:
             raise ValueError(f"figure for kind {kind!r} registered twice")
-        FIGURES[kind] = function
-        return function
+        FIGURES[kind] = styled(function)
+        return FIGURES[kind]
 
     return register

@@ -1,8 +1,9 @@
 """Figures of single runs: the paper's Fig. 7/9/11/13 layout, the stroboscope of Fig. 17, gaps (Figs. 8, 10, 12)
 and comparisons of several runs (Figs. 14, 15).
 
-Conventions of every figure here: axis labels read "quantity symbol [unit]"; legends sit outside the
-data area (right of the axes); the levels r - e and r + e are labelled outside the axes, right of the
+Conventions of every figure here: panels stacked in one column at the page's width (:mod:`.style`); axis
+labels read "quantity symbol [unit]"; legends sit outside the data area (above a panel or below the figure); the
+levels r - e and r + e are labelled outside the axes, right of the
 plot, where no curve can cover them; colours and line styles follow the paper's text where it gives
 them (Sect. 6), see :data:`PAPER_ANGLE_STYLES` and :data:`PAPER_MODEL_STYLES`.
 """
@@ -21,6 +22,7 @@ from ..kinematics import rotation_from_euler
 from ..results import config_of
 from .labels import ending
 from .registry import figure
+from .style import stacked, styled
 
 TIME_LABEL = "time t [s]"
 
@@ -55,14 +57,9 @@ PAPER_MODEL_STYLES = {
 }
 
 
-def _legend_outside(ax, **kwargs) -> None:
-    """Legend right of the axes (outside the data area)."""
-    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, fontsize=8, **kwargs)
-
-
 def _legend_above(ax, ncol: int = 2) -> None:
     """Legend above the axes (outside the data area; the right margin keeps the level labels)."""
-    ax.legend(loc="lower left", bbox_to_anchor=(0.0, 1.02), borderaxespad=0.0, fontsize=8, ncol=ncol, frameon=False)
+    ax.legend(loc="lower left", bbox_to_anchor=(0.0, 1.02), borderaxespad=0.0, ncol=ncol, frameon=False)
 
 
 def _label_levels_outside(ax, levels) -> None:
@@ -70,7 +67,7 @@ def _label_levels_outside(ax, levels) -> None:
     for value, text in levels:
         ax.axhline(value, color="0.6", lw=0.8, zorder=0)
         ax.annotate(text, (1.01, value), xycoords=("axes fraction", "data"), ha="left", va="center", color="0.3",
-                    fontsize=8, annotation_clip=False)
+                    annotation_clip=False)
 
 
 def _markevery(ds: xr.Dataset, spacing: float) -> int:
@@ -94,7 +91,8 @@ def simulation_figure(ds: xr.Dataset, companion: xr.Dataset | None = None, angle
     "fig11" (colours swapped, as the paper's Fig. 11).
     """
     styles = PAPER_ANGLE_STYLES[angle_styles]
-    fig, axes = plt.subplots(2, 2, figsize=(11, 6.5), constrained_layout=True)
+    fig, panels = stacked(4, 2.9, 0.6, sharex=True)  # beta and gamma, z_S, E_kin, E_pot and E_tot
+    axes = np.array(panels).reshape(2, 2)
     runs = [(ds, {})]
     if companion is not None:
         runs.append((companion, {"ls": "-", "lw": 0.6, "marker": "o", "ms": 3, "mfc": "none",
@@ -135,13 +133,15 @@ def simulation_figure(ds: xr.Dataset, companion: xr.Dataset | None = None, angle
     draw(ax, "E_tot", r"$E_\mathrm{tot}$", style_table=ENERGY_STYLES)
     ax.set(xlabel=TIME_LABEL, ylabel=r"energy $E_\mathrm{pot}$, $E_\mathrm{tot}$ [J]")
     _legend_above(ax)
+    for ax in panels[:-1]:  # the time axis is shared: labelled once, at the bottom
+        ax.set_xlabel("")
     if "mode" in ds:
         shade_sliding(axes.ravel(), ds)
     if title is None:
         title = f"{main} ({ds.attrs.get('model', '')}{ending(ds.attrs.get('status', ''))})"
         if companion is not None:
             title += f"; {comp} ({companion.attrs.get('model', '')}{ending(companion.attrs.get('status', ''))})"
-    fig.suptitle(title, fontsize=10)
+    fig.suptitle(title, wrap=True)
     return fig
 
 
@@ -152,7 +152,7 @@ def shade_sliding(axes, ds: xr.Dataset) -> None:
     for ax in axes:
         for n, k in enumerate(sliding):
             ax.axvspan(times[k], times[k + 1], color="0.85", zorder=0, lw=0, label="sliding" if n == 0 else None)
-    axes[0].legend(fontsize=7, loc="lower right")
+    axes[0].legend(loc="lower right")
 
 
 def draw_convergence(ax, ds: xr.Dataset) -> None:
@@ -163,7 +163,7 @@ def draw_convergence(ax, ds: xr.Dataset) -> None:
     ax.loglog(dt, err[0] * dt / dt[0], "k:", label="first order")
     ax.set_xlabel("Moreau time step dt [s]")
     ax.set_ylabel("[rad]")
-    ax.legend(fontsize=8)
+    ax.legend()
 
 
 @figure("rolling_convergence")
@@ -223,7 +223,7 @@ def stroboscopic_figure(ds: xr.Dataset, t_stop: float | None = None, max_frames:
                                           gridspec_kw={"width_ratios": [width, 4.0]})
         text_ax.axis("off")
         text_ax.text(0.0, 1.0, "\n".join(textwrap.fill(p, 48) for p in description.split("\n")), va="top",
-                     ha="left", fontsize=8, transform=text_ax.transAxes)
+                     ha="left", transform=text_ax.transAxes)
     spacing = 2.4 * r
     for k in range(n):
         f = frames.isel(time=k)
@@ -237,7 +237,7 @@ def stroboscopic_figure(ds: xr.Dataset, t_stop: float | None = None, max_frames:
                 color="0.45", lw=0)
         ax.plot(k * spacing, G[2], "o", color="w", mec="k", ms=4)
         ax.plot(S @ right + k * spacing - right @ G, S[2], "o", color="tab:red", ms=4)
-        ax.annotate(f"{float(f.time):.2f} s", (k * spacing, -0.3 * r), ha="center", fontsize=7)
+        ax.annotate(f"{float(f.time):.2f} s", (k * spacing, -0.3 * r), ha="center")
     ax.axhline(0.0, color="k", lw=1.5)
     ax.set_aspect("equal")
     ax.set_xlim(-1.3 * r, (n - 1) * spacing + 1.3 * r)
@@ -245,17 +245,17 @@ def stroboscopic_figure(ds: xr.Dataset, t_stop: float | None = None, max_frames:
     ax.set_xticks([])
     ax.set_yticks([])
     ax.set_title(f"{_name(ds)}, " + r"$\dot\alpha_0$" + f" = {float(ds.alpha_dot[0]):g} rad/s: one frame per full turn "
-                 "(same side to the camera); dark: half containing S (red dot), white dot: G", fontsize=8)
+                 "(same side to the camera); dark: half containing S (red dot), white dot: G")
     return fig
 
 
+@styled
 def gap_figure(datasets: dict, references: dict | None = None):
     """Gap g_N1 of the contact point C1 over time, one panel per dataset (the paper's Figs. 8, 10, 12).
 
     ``references``: {panel label: (value [m], text)} draws the paper's value as a labelled level."""
-    fig, axes = plt.subplots(1, len(datasets), figsize=(4.6 * len(datasets), 3.4), constrained_layout=True,
-                             squeeze=False)
-    for ax, (label, ds) in zip(axes[0], datasets.items()):
+    fig, axes = stacked(len(datasets), 3.0)
+    for ax, (label, ds) in zip(axes, datasets.items()):
         ax.plot(ds["time"], ds["g_N1"], color="tab:blue", lw=0.6)
         ax.ticklabel_format(axis="y", style="sci", scilimits=(0, 0))
         title = label
@@ -266,7 +266,7 @@ def gap_figure(datasets: dict, references: dict | None = None):
             ax.set_ylim(min(low, value - 0.1 * abs(value)), high)
             title += f"\nred dashed: {text}"
         ax.set(xlabel=TIME_LABEL, ylabel=r"gap $g_{N1}$ [m]")
-        ax.set_title(title, fontsize=9, pad=14)
+        ax.set_title(title, pad=14)
     return fig
 
 
@@ -285,6 +285,7 @@ def _time_with_gaps(t: np.ndarray, values: np.ndarray) -> np.ndarray:
     return np.insert(np.asarray(t, dtype=float), jumps + 1, np.nan)
 
 
+@styled
 def comparison_figure(datasets: dict, styles: dict | None = None, events: dict | None = None,
                       zoom: float | None = None, zoom_exclude: tuple = (), wrap: bool = False,
                       marker_spacing: float = 0.25):
@@ -301,7 +302,7 @@ def comparison_figure(datasets: dict, styles: dict | None = None, events: dict |
     styles = styles or {}
     events = events or {}
     ncols = 3 if zoom else 2
-    fig, axes = plt.subplots(1, ncols, figsize=(5.0 * ncols + 2.0, 4.4), constrained_layout=True)
+    fig, axes = stacked(ncols, 3.6, 0.4 + 0.3 * len(datasets))
     energy_ax = axes[-1]
     for k, (label, ds) in enumerate(datasets.items()):
         style = {"lw": 0.9, **styles.get(label, {})}
@@ -330,21 +331,20 @@ def comparison_figure(datasets: dict, styles: dict | None = None, events: dict |
         axes[0].set_yticks([-0.5 * math.pi, 0.0, 0.5 * math.pi, math.pi, 1.5 * math.pi],
                            [r"$-\pi/2$", "0", r"$\pi/2$", r"$\pi$", r"$3\pi/2$"])
         axes[0].set(xlabel=TIME_LABEL, ylabel=r"rotation angle $\gamma$, wrapped [rad]")
-        axes[0].set_title(r"all runs, $\gamma$ wrapped to $[-\pi/2, 3\pi/2)$", fontsize=9)
+        axes[0].set_title(r"all runs, $\gamma$ wrapped to $[-\pi/2, 3\pi/2)$")
     else:
         axes[0].set(xlabel=TIME_LABEL, ylabel=r"rotation angle $\gamma$ [rad]")
     if zoom:
         axes[1].set_ylim(0.5 * math.pi - zoom, 0.5 * math.pi + zoom)
         axes[1].set(xlabel=TIME_LABEL, ylabel=r"rotation angle $\gamma$ [rad]")
         left_out = f"; not shown: {', '.join(zoom_exclude)}" if zoom_exclude else ""
-        axes[1].set_title(rf"zoom $|\gamma - \pi/2| \leq {zoom:g}$ rad{left_out}", fontsize=8)
+        axes[1].set_title(rf"zoom $|\gamma - \pi/2| \leq {zoom:g}$ rad{left_out}")
     for ax in axes[:-1]:
         ax.axhline(0.5 * math.pi, color="0.6", lw=0.8, zorder=0)
     energy_ax.set(xlabel=TIME_LABEL, ylabel=r"total energy $E_\mathrm{tot}$ [J]")
-    _legend_outside(energy_ax)
+    fig.legend(*energy_ax.get_legend_handles_labels(), loc="outside lower center", ncol=2, frameon=False)
     if events:
         handles, labels = axes[0].get_legend_handles_labels()
         marks = [(h, lab) for h, lab in zip(handles, labels) if " from t = " in lab]
-        axes[0].legend([h for h, _ in marks], [lab for _, lab in marks], loc="upper left", bbox_to_anchor=(0.0, -0.14),
-                       fontsize=7, borderaxespad=0.0)
+        axes[0].legend([h for h, _ in marks], [lab for _, lab in marks], loc="best")
     return fig

@@ -10,6 +10,7 @@ from matplotlib.colors import SymLogNorm
 from ..analysis.maps import critical_speed_curves
 from .labels import axis_label, symbol
 from .registry import figure
+from .style import stacked
 
 
 @figure("stability_map")
@@ -29,7 +30,8 @@ def stability_map_figure(ds: xr.Dataset, eps_index: int | None = None):
     k = eps_index
     vmax = float(np.abs(sub["max_real_eig"]).max()) or 1.0
     norm = SymLogNorm(linthresh=min(1e-3, vmax), vmin=-vmax, vmax=vmax)  # |s| down to 1e-3/s takes a colour
-    fig, axes = plt.subplots(2, 2, figsize=(11, 8), constrained_layout=True)
+    fig, panels = stacked(2 * sub.sizes["branch"], 3.6, 1.4)  # the maps of the branches, then their eigenvalues
+    axes = np.array(panels).reshape(2, -1)
     for j, branch in enumerate(sub["branch"].values):
         b = sub.sel(branch=branch)
         ax = axes[0, j]
@@ -61,9 +63,9 @@ def stability_map_figure(ds: xr.Dataset, eps_index: int | None = None):
         ax.set_yscale("symlog", linthresh=0.1)
         ax.set(xlabel=axis_label("omega", "rad s-1"), ylabel=r"Re $s_k$ [1/s]",
                title=rf"{branch}: eigenvalue real parts at $\varepsilon$ = {eps[k]:g} m/s")
-    fig.legend(handles=_legend_handles(len(omega) > 1 and len(eps) > 1), loc="outside lower center", ncol=2,
-               fontsize=11, frameon=False)
-    fig.suptitle("Stationary spinning solutions, ODE Model 1 reduced" + (f" ({fixed})" if fixed else ""))
+    fig.legend(handles=_legend_handles(len(omega) > 1 and len(eps) > 1), loc="outside lower center", ncol=1,
+               frameon=False)
+    fig.suptitle("Stationary spinning solutions, ODE Model 1 reduced" + (f" ({fixed})" if fixed else ""), wrap=True)
     return fig
 
 

@@ -10,6 +10,7 @@ from matplotlib.colors import BoundaryNorm, ListedColormap
 from .attractors import attractor_outcome_map_figure
 from .labels import axis_label, ending, symbol, with_symbols
 from .registry import figure
+from .style import WIDTH, stacked
 
 
 @figure("poincare")
@@ -19,15 +20,14 @@ def poincare_figure(ds: xr.Dataset):
     names = str(ds.attrs.get("state_names", "")).split()
     pairs = (("gamma", "gamma_dot"), ("beta", "gamma")) if "system" not in ds.attrs else \
         tuple(zip(names, names[1:] + names[:1]))[: max(1, min(2, len(names) - 1))]
-    fig, axes = plt.subplots(1, len(pairs), figsize=(5 * len(pairs), 4.5), constrained_layout=True, squeeze=False)
-    axes = axes[0]
+    fig, axes = stacked(len(pairs), 4.0, 0.4)
     for ax, (x, y) in zip(axes, pairs):
         sc = ax.scatter(ds[x], ds[y], c=ds["time"], s=8, cmap="viridis")
         ax.set(xlabel=axis_label(x, ds[x].attrs.get("units", "")), ylabel=axis_label(y, ds[y].attrs.get("units", "")))
         _no_round_off_zoom(ax, ds[x].values, ds[y].values)
     fig.colorbar(sc, ax=axes, label=axis_label("time", ds["time"].attrs.get("units", "s")))
     fig.suptitle(f"Poincaré section {with_symbols(ds.attrs.get('section', ''))} ({ds.attrs.get('direction', '')}): "
-                 f"{ds.attrs.get('n_crossings', 0)} crossings{ending(ds.attrs.get('status', ''))}")
+                 f"{ds.attrs.get('n_crossings', 0)} crossings{ending(ds.attrs.get('status', ''))}", wrap=True)
     return fig
 
 
@@ -59,7 +59,7 @@ def outcome_map_figure(ds: xr.Dataset):
                "failed": "black", "rolling": "tab:orange"}
     cmap = ListedColormap([palette.get(m, "tab:purple") for m in meanings])
     norm = BoundaryNorm([v - 0.5 for v in values] + [values[-1] + 0.5], cmap.N)
-    fig, axes = plt.subplots(2, 1, figsize=(7.5, 8.5), constrained_layout=True)
+    fig, axes = stacked(2, 4.0, 0.5)
     x, y = dims[0], dims[1]
     mesh = axes[0].pcolormesh(ds[x], ds[y], out.transpose(y, x), cmap=cmap, norm=norm, shading="nearest")
     cbar = fig.colorbar(mesh, ax=axes[0], ticks=values)
@@ -73,18 +73,19 @@ def outcome_map_figure(ds: xr.Dataset):
                title=title)
     extra = ", ".join(f"{symbol(d)} = {float(ds[d][0]):g}" for d in dims[2:])
     fig.suptitle(f"Outcome map, {ds.attrs.get('paper_model', '')}, runs of {ds.attrs.get('t_end', '')} s"
-                 + (f" ({extra})" if extra else ""))
+                 + (f" ({extra})" if extra else ""), wrap=True)
     return fig
 
 
 @figure("bifurcation")
 def bifurcation_figure(ds: xr.Dataset):
     """Brute-force bifurcation diagram: the recorded quantity at the crossings against Omega."""
-    fig, ax = plt.subplots(figsize=(8, 5), constrained_layout=True)
+    fig, ax = plt.subplots(figsize=(WIDTH, 5), constrained_layout=True)
     ax.plot(ds["omega_of_point"], ds["value"], ".", color="k", markersize=2, linestyle="none")
     quantity = ds.attrs.get("quantity", "")
-    wrapped = ", wrapped into (-pi, pi]" if "wrapped" in ds["value"].attrs.get("long_name", "") else ""
+    wrapped = r", wrapped to $(-\pi, \pi]$" if "wrapped" in ds["value"].attrs.get("long_name", "") else ""
     ax.set(xlabel=axis_label("omega", "rad s-1") + " at t = 0",
            ylabel=axis_label(quantity, ds["value"].attrs.get("units", "")) + wrapped,
-           title=f"crossings of {ds.attrs.get('section', '')} ({ds.attrs.get('direction', '')}) after transients")
+           title=f"crossings of {with_symbols(ds.attrs.get('section', ''))} ({ds.attrs.get('direction', '')})\n"
+                 "after transients")
     return fig
