@@ -388,6 +388,20 @@ def test_compare_fits_prefers_the_generating_model(tmp_path):
     assert list(back.model.values) == ["linear_oscillator", "damped_pendulum"]
 
 
+def test_public_names_and_cli_plot_of_a_comparison(tmp_path, capsys):
+    """td.__all__ lists fit and compare_fits; `tippedisk plot` draws a fit_comparison dataset (Delta AIC, BIC bars)."""
+    from tippedisk_analysis.cli import main
+
+    assert {"fit", "compare_fits"} <= set(td.__all__)
+    t, _exact, data = pendulum_record(3)
+    fits = [dy.fit(system, t, {"x": data}, ["c", "k"], state={"x": 1.2, "v": 0.0})
+            for system in (linear_oscillator(), pendulum())]
+    path = td.save(td.compare_fits(fits), tmp_path / "table.nc")
+    assert main(["plot", str(path), "-o", str(tmp_path / "table.png")]) == 0, capsys.readouterr().err
+    assert "fit_comparison figure" in capsys.readouterr().out
+    assert (tmp_path / "table.png").stat().st_size > 10_000
+
+
 def test_compare_fits_refuses_fits_of_different_records():
     t, _exact, data = pendulum_record(3)
     one = dy.fit(pendulum(), t, {"x": data}, ["c", "k"], state={"x": 1.2, "v": 0.0})

@@ -20,7 +20,8 @@ _LAZY = {"Disk": "parameters", "Friction": "parameters", "InitialState": "parame
 
 __all__ = [
     "DatasetError", "Disk", "Friction", "InitialState", "IntegrationError", "ParameterError", "Setup",
-    "TippediskError", "UnknownModelError", "__version__", "load", "model_names", "save", "simulate",
+    "TippediskError", "UnknownModelError", "__version__", "compare_fits", "fit", "load", "model_names", "save",
+    "simulate",
 ]
 
 

@@ -1,5 +1,6 @@
 """Fit datasets (:func:`tippedisk_analysis.dynamics.fit`): each observed series, its data against the fitted run
-and the residuals (data - fit) below it, and the correlation matrix of the free values with their estimates."""
+and the residuals (data - fit) below it, and the correlation matrix of the free values with their estimates; model
+comparisons (:func:`tippedisk_analysis.dynamics.compare_fits`): Delta AIC and Delta BIC per model as bars."""
 
 from __future__ import annotations
 
@@ -92,3 +93,35 @@ def _correlation(ax, fig, ds: xr.Dataset) -> None:
     ax.set_title("correlation of the estimates", fontsize=10)
     ax.set_xlabel("\n".join(lines), fontsize=9)
     fig.colorbar(image, ax=ax, shrink=0.6, label="correlation")
+
+
+DECISIVE = 10.0  # a criterion difference above which the better model is decisively better
+
+
+@figure("fit_comparison")
+def fit_comparison_figure(ds: xr.Dataset):
+    """Models fitted to the same record (td.compare_fits): Delta AIC and Delta BIC per model as horizontal bars
+    (0: the best), the decisive difference 10 dashed, each bar labelled with its value and a fit's status if it is
+    not completed (hatched); a symmetric-log axis once a difference exceeds 100."""
+    models = [str(m) for m in ds["model"].values]
+    statuses = [str(s) for s in ds["fit_status"].values]
+    fig, axes = plt.subplots(1, 2, figsize=(9, 1.4 + 0.5 * len(models)), sharey=True, constrained_layout=True)
+    y = np.arange(len(models))
+    for ax, name, label in zip(axes, ("delta_aic", "delta_bic"), (r"$\Delta$AIC", r"$\Delta$BIC")):
+        values = ds[name].values
+        bars = ax.barh(y, values, color=FIT, height=0.6)
+        for bar, status in zip(bars, statuses):
+            if status != "completed":
+                bar.set_hatch("//")
+        ax.axvline(DECISIVE, color="0.4", lw=0.8, ls="--")
+        if np.max(values) > 100:
+            ax.set_xscale("symlog", linthresh=1.0)
+        for k, (value, status) in enumerate(zip(values, statuses)):
+            note = f" {value:.3g}" + ("" if status == "completed" else f" ({status})")
+            ax.text(max(value, 0.0), k, note, va="center", ha="left", fontsize=9)
+        ax.set_xlim(0, 3 * max(np.max(values), DECISIVE))
+        ax.set_xlabel(f"{label} (lower is better; {DECISIVE:g}: decisive)")
+    axes[0].set_yticks(y, models)
+    axes[0].invert_yaxis()
+    fig.suptitle(f"models fitted to the same record ({int(ds.attrs.get('n_samples', 0))} samples)")
+    return fig
