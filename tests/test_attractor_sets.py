@@ -15,6 +15,7 @@ from scipy.integrate import solve_ivp
 
 from tippedisk_analysis import dynamics as dy
 from tippedisk_analysis.dynamics import attractors as at
+from tippedisk_analysis.dynamics.attractors import conservative, system_problem
 
 x, y, u, w, px, py = hy.make_vars("x", "y", "u", "w", "px", "py")
 PERIODIC = 1
@@ -175,7 +176,7 @@ def test_a_weakly_damped_oscillator_keeps_its_attractor(delta):
     """x'' + delta x' + x = 0: the divergence is -delta everywhere, with no scatter: never conservative, however
     small delta; the origin is the one attractor."""
     s = dy.System("damped", [x, y], [y, -hy.par[0] * y - x], parameters={"delta": delta})
-    volume = at.conservative.volume_test(at.system_problem.SystemProblem(s, dy.Grid(("x", "y"), (-3, -3), (3, 3),
+    volume = conservative.volume_test(system_problem.SystemProblem(s, dy.Grid(("x", "y"), (-3, -3), (3, 3),
                                                                                       (60, 60))),
                                          at.RecurrenceSettings(horizon=100.0), {"x": (-2.0, 2.0, 9)}, [0.0, 0.0],
                                          s.pars, 4)
@@ -187,7 +188,7 @@ def test_a_volume_test_too_short_for_its_runs_does_not_decide():
     """Runs shorter than the blocks' two correlation times tell nothing: the test is undecided (not conservative),
     and says so."""
     s = dy.System("lotka_volterra", [x, y], [x * (1 - y), y * (x - 1)])
-    volume = at.conservative.volume_test(at.system_problem.SystemProblem(s, dy.Grid(("x", "y"), (0, 0), (8, 8),
+    volume = conservative.volume_test(system_problem.SystemProblem(s, dy.Grid(("x", "y"), (0, 0), (8, 8),
                                                                                       (80, 80))),
                                          at.RecurrenceSettings(horizon=10.0), {"x": (0.3, 2.5, 8)}, [0.0, 1.0],
                                          s.pars, 4)
@@ -196,7 +197,10 @@ def test_a_volume_test_too_short_for_its_runs_does_not_decide():
 
 PROJECTIONS = {"x, y": dy.Grid(("x", "y"), (-4, -5), (4, 5), (80, 100)),
                "x, y, u": dy.Grid(("x", "y", "u"), (-4, -5, -1.5), (4, 5, 1.5), (80, 100, 30)),
-               "x, u": dy.Grid(("x", "u"), (-4, -1.5), (4, 1.5), (80, 30))}
+               "x, u": dy.Grid(("x", "u"), (-4, -1.5), (4, 1.5), (80, 30)),
+               # coarse: a window that the periodic check does not close has one neutral exponent, not two (it
+               # was taken for a third, irregular attractor holding 90 starts)
+               "x, y coarse": dy.Grid(("x", "y"), (-4, -5), (4, 5), (40, 50))}
 
 
 @pytest.mark.parametrize("name", list(PROJECTIONS))
@@ -262,3 +266,14 @@ def test_a_torqued_pendulum_on_a_grid_over_its_angle_alone_tells_the_rest_point_
                     t_eval=np.linspace(180.0, 200.0, 201))
     running = np.abs(run.y[n:]).mean(axis=1).reshape(T.shape) > 0.5
     np.testing.assert_array_equal(ds.outcome.values != rest, running)
+    # the running orbit is a closed orbit on the cylinder: its least period is the time of one turn
+    turn = 1 - rest
+    assert int(ds.attractor_kind[turn]) == PERIODIC
+    k = int(np.flatnonzero(running.ravel())[0])
+    one = solve_ivp(lambda t, z: [z[1], 0.5 - 0.25 * z[1] - math.sin(z[0])], (0.0, 400.0), [T.ravel()[k], W.ravel()[k]],
+                    method="DOP853", rtol=1e-12, atol=1e-12, dense_output=True)
+    up = [t for t in np.linspace(300.0, 400.0, 20001)][:-1]
+    angle = one.sol(np.array(up))[0]
+    marks = np.floor(angle / (2 * math.pi))
+    crossings = np.flatnonzero(np.diff(marks) != 0)
+    assert float(ds.attractor_period[turn]) == pytest.approx(np.mean(np.diff(np.array(up)[crossings])), rel=1e-3)

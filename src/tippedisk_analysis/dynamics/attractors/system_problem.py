@@ -203,11 +203,8 @@ class SystemProblem(Problem):
         least period divides it (to 2 dt + PERIOD_RTOL) and whose nontrivial multipliers lie inside the unit
         circle; its description (centroid, spread, amplitude, cells) is that of the shooting orbit."""
         pars = np.asarray(pars, dtype=float)
-        for segments in (1, 4):
-            orbit = find_orbit(self.system, state, period, pars, segments=segments)
-            if orbit.converged:
-                break
-        else:
+        orbit = self._closed_orbit(state, period, pars)
+        if orbit is None:
             self._reject("orbit_not_closed")
             return None
         turns = max(1, round(period / orbit.period))
@@ -230,6 +227,44 @@ class SystemProblem(Problem):
                            cells=tuple(int(c) for c in np.unique(keys[keys >= 0])),
                            points=dense_observed[:, index], state_points=self._state_points(dense[:, index]))
 
+    def _closed_orbit(self, state, period: float, pars):
+        """The converged shooting orbit through ``state`` near ``period`` (1, then 4 segments), or None. A rotation
+        of k whole turns over ``period`` (:meth:`_rotation`) is tried as d orbits of k / d turns each, d a divisor
+        of k from the largest, so that the orbit found has its least period."""
+        shift = self._rotation(state, period, pars)
+        k = 1 if shift is None else math.gcd(*(int(abs(round(t))) for t in self._turns(shift) if round(t)))
+        for d in [d for d in range(k, 0, -1) if k % d == 0]:
+            for segments in (1, 4):
+                orbit = find_orbit(self.system, state, period / d, pars, segments=segments,
+                                   shift=None if shift is None else shift / d)
+                if orbit.converged:
+                    return orbit
+        return None
+
+    def _turns(self, shift: np.ndarray) -> list:
+        """Whole turns of ``shift`` in each state that is a periodic coordinate of the grid."""
+        return [shift[self.system.state_index(name)] / (hi - lo) for name, per, lo, hi in
+                zip(self.grid.names, self.grid.periodic, self.grid.lower, self.grid.upper)
+                if per and name in self.system.state_names]
+
+    def _rotation(self, state, period: float, pars) -> np.ndarray | None:
+        """The shift x(period) - x(0) of the states that are periodic coordinates of the grid, in whole turns (a
+        rotation: a pendulum running over the top closes on the cylinder, not in the plane); None if there is none."""
+        turns = [(self.system.state_index(name), hi - lo) for name, per, lo, hi in
+                 zip(self.grid.names, self.grid.periodic, self.grid.lower, self.grid.upper)
+                 if per and name in self.system.state_names]
+        if not turns:
+            return None
+        ta = copy.copy(self.system.taylor(self.tol))
+        ta.time, ta.state[:] = 0.0, state
+        if ta.pars.size:
+            ta.pars[:] = pars[: ta.pars.size]
+        ta.propagate_until(float(period))
+        shift = np.zeros(self.system.n)
+        for i, length in turns:
+            shift[i] = length * np.round((ta.state[i] - state[i]) / length)
+        return shift if np.any(shift) and np.all(np.isfinite(shift)) else None
+
     def _one_period(self, state, period: float, pars) -> np.ndarray:
         """(n, DENSE_SAMPLES) states of the orbit through ``state`` at equal time steps over one ``period``."""
         ta = copy.copy(self.system.taylor(self.tol))
@@ -239,17 +274,24 @@ class SystemProblem(Problem):
         return ta.propagate_grid(np.linspace(0.0, period, DENSE_SAMPLES, endpoint=False))[-1].T
 
     def _not_contracting(self, state, pars, window: float) -> bool:
-        """Whether the largest Lyapunov exponent from ``state`` over ``window`` is not negative (> -3 / window,
-        the finite-time error of a neutral direction): an irregular attractor (chaos, a torus) rather than a
-        slow approach to something else."""
+        """Whether the two largest Lyapunov exponents from ``state`` over ``window`` make an irregular attractor:
+        the largest not negative (> -3 / window, the finite-time error of a neutral direction) and, besides the flow
+        direction's zero, a second exponent that is positive or neutral (chaos: +, 0; a torus: 0, 0). One neutral
+        exponent and the rest negative is a cycle that shooting did not close (a forced system's response): no
+        irregular attractor; a negative largest one is a slow approach to something else."""
+        band = 3.0 / window
         try:
-            exponent = spectrum(self.system, state, pars, n_exponents=1, t_end=window, dt=window / 50).exponents[0]
+            exponents = spectrum(self.system, state, pars, n_exponents=min(2, self.system.n), t_end=window,
+                                 dt=window / 50).exponents
         except TippediskError:
-            exponent = math.nan
-        if exponent > -3.0 / window:
-            return True
-        self._reject("contracting")
-        return False
+            exponents = np.full(2, math.nan)
+        if not exponents[0] > -band:
+            self._reject("contracting")
+            return False
+        if len(exponents) > 1 and exponents[0] <= band and exponents[1] <= -band:
+            self._reject("orbit_not_closed")
+            return False
+        return True
 
     def integrator(self, batch_size: int):
         return self.system.taylor(self.tol, batch=int(batch_size), events=self._events)
