@@ -27,6 +27,27 @@ PENDING: set[str] = set()
 # Pages of results, each shown with at least one figure (built page names; the inversion's topic pages by prefix)
 ANALYSIS_PAGES = re.compile(r"^(stability|continuation|periodic_orbits|periodic_orbits_tippedisk|dynamics|attractors"
                             r"|trajectories|rolling|inversion(_\w+)?)\.html$")
+# Figure text beside 16-px body text: the smallest text of a figure shown in furo's text column (590 px at its
+# narrowest desktop layout; 736 px at a 1366-px window, measured in Chromium) renders at least this large
+COLUMN_PX = 590
+MIN_FIGURE_TEXT_PX = 14
+# Figures on analysis pages that are not drawn in the plotting package's style, and why
+FIGURE_TEXT_EXEMPT = {
+    "spin_passage.png": "its study's 110-s runs are not stored (data/inversion/spin_passage.nc holds the summary)",
+    "nutation_cycles.png": "its study's runs and families are not stored, only their summary",
+    "free_nutation.png": "its study's two ODE Model 1 runs are not stored",
+    "continuation_window.png": "its background stability map (241 x 121 points) is computed by the study, not stored",
+    "critical_spin.png": "drawn by studies/critical_spin.py in its own layout",
+    "critical_spin_mechanism.png": "drawn by studies/critical_spin.py in its own layout",
+    "held_spin.png": "drawn by studies/held_spin.py in its own layout",
+    "held_spin_curves.png": "drawn by studies/held_spin.py in its own layout",
+    "highest_point.png": "drawn by studies/highest_point.py in its own layout",
+    "lower_spin_homoclinic.png": "drawn by studies/lower_spin_homoclinic.py in its own layout",
+    "periodic_orbits.png": "drawn by studies/periodic_orbits.py in its own layout",
+    "rolling_section.png": "drawn by studies/rolling.py in its own layout",
+    "rolling_inversion.png": "drawn by studies/rolling.py in its own layout (its runs are not stored)",
+    "rolling_family.png": "drawn by studies/rolling.py in its own layout",
+}
 # Reference generated from the code (docstrings, argparse) and the changelog are not prose pages for the length
 LENGTH_EXEMPT = re.compile(r"^(_generated/|changelog\.html$|genindex\.html$|search\.html$|py-modindex\.html$)")
 
@@ -168,6 +189,81 @@ def test_every_image_links_to_its_full_size_file(site):
                 unlinked.setdefault(name, []).append(match.group(1))
     assert not unlinked, unlinked
 
+
+
+def shown_width(img_tag: str, natural_px: int) -> float:
+    """Width [px] at which furo shows an <img> in a COLUMN_PX column: its style's width (px or %), else its own
+    width, never wider than the column."""
+    width = re.search(r"width:\s*([\d.]+)(px|%)", img_tag)
+    if not width:
+        return min(natural_px, COLUMN_PX)
+    value, unit = float(width.group(1)), width.group(2)
+    return min(value if unit == "px" else COLUMN_PX * value / 100.0, COLUMN_PX)
+
+
+def test_figure_text_on_analysis_pages_is_as_large_as_the_body_text(site):
+    """Each figure of an analysis page records its smallest text and width in its PNG (plotting.style); at the width
+    the page shows it, that text is at least MIN_FIGURE_TEXT_PX (body text: 16 px). Figures not drawn in the
+    plotting package's style are listed in FIGURE_TEXT_EXEMPT with the reason."""
+    from PIL import Image
+
+    from tippedisk_analysis.plotting.style import rendered_px
+
+    sizes, small, shown = {}, {}, set()
+    for name, body in pages(site).items():
+        if not ANALYSIS_PAGES.match(name):
+            continue
+        for tag in re.findall(r"<img\b[^>]*>", body):
+            source = re.search(r'\bsrc="([^"]+)"', tag).group(1)
+            figure = Path(source).name
+            shown.add(figure)
+            if figure in FIGURE_TEXT_EXEMPT:
+                continue
+            with Image.open((site / name).parent / source) as image:
+                description, natural = image.info.get("Description", ""), image.width
+            if not description:
+                small[f"{name}: {figure}"] = "no Description (not drawn by plotting.plot_dataset)"
+                continue
+            sizes[figure] = rendered_px(description, shown_width(tag, natural))
+            if sizes[figure] < MIN_FIGURE_TEXT_PX:
+                small[f"{name}: {figure}"] = f"{sizes[figure]:.1f} px"
+    assert not small, small
+    assert len(sizes) >= 8, sizes
+    assert not set(FIGURE_TEXT_EXEMPT) - shown, "exempt figures no analysis page shows"
+
+
+@pytest.mark.parametrize("data, options", [("stability_map.nc", {}), ("attractors/basins_eps0.25.nc", {}),
+                                           ("periodic/periodic_tippedisk_frictionless.nc", {}),
+                                           ("fig13_ode_inversion.nc", {})])
+def test_figures_record_text_readable_at_the_column_width(tmp_path, data, options):
+    """plot_dataset's PNG records its smallest text and width; shown COLUMN_PX wide that text is >= 14 px, and the
+    record holds: no tick label, axis label, title or legend text of the redrawn figure is smaller."""
+    import matplotlib.pyplot as plt
+    from matplotlib.legend import Legend
+    from matplotlib.text import Text
+    from PIL import Image
+
+    import tippedisk_analysis as td
+    from tippedisk_analysis.plotting import FIGURES, plot_dataset
+    from tippedisk_analysis.plotting.style import DESCRIPTION, rendered_px
+
+    ds = td.load(DOCS.parent / "data" / data)
+    with Image.open(plot_dataset(ds, tmp_path / "figure.png", **options)) as image:
+        description, width_px, dpi = image.info["Description"], image.width, image.info["dpi"][0]
+    points, width_in = (float(v) for v in DESCRIPTION.search(description).groups())
+    assert abs(width_px - width_in * dpi) <= 1
+    assert rendered_px(description, COLUMN_PX) >= MIN_FIGURE_TEXT_PX
+    fig = FIGURES[ds.attrs["kind"]](ds, **options)
+    fig.canvas.draw()
+    texts = [fig._suptitle, *fig.texts, *(lg for lg in fig.legends)]
+    for ax in fig.axes:
+        texts += [*ax.get_xticklabels(), *ax.get_yticklabels(), ax.xaxis.label, ax.yaxis.label, ax.title, *ax.texts,
+                  ax.get_legend()]
+    legends = [t for t in texts if isinstance(t, Legend)]
+    texts = [t for t in texts if isinstance(t, Text)] + [t for lg in legends for t in lg.get_texts()]
+    fonts = [t.get_fontsize() for t in texts if t.get_visible() and t.get_text().strip()]
+    plt.close(fig)
+    assert min(fonts) >= points and fig.get_figwidth() == width_in  # ticks, labels, titles, legends
 
 
 def test_the_tutorials_kernels_show_no_compile_notice(tmp_path, monkeypatch):
