@@ -1,5 +1,6 @@
-"""``tippedisk critical-spin``: the critical spin in closed form, the initial spin (C5) gives from it, and with
---simulate the full model's thresholds and (C7), which counts friction's work (docs/inversion.md)."""
+"""``tippedisk critical-spin``: the critical spin in closed form, the initial spin (C5) gives from it, with
+--simulate the full model's threshold, and with --top (C7), which counts friction's work, against the full model's
+threshold for reaching the top (docs/inversion.md)."""
 
 from __future__ import annotations
 
@@ -22,9 +23,12 @@ def _arguments(p) -> None:
                         "the full model's eps, horizon 150 s x max(1, 0.1/eps))")
     p.add_argument("--simulate", action="store_true",
                    help="also find the full model's threshold by bisection (ODE Model 1: seconds to a minute at eps "
-                        "0.1, longer at small eps), how high S gets at the predicted spin, whether the slow "
-                        "flow holds at the threshold (eps 0.01), and the spin that reaches the top with friction's "
-                        "work counted (C7, slow flow at eps 0.01) against the full model's threshold for r + 0.99 e")
+                        "0.1, longer at small eps), how high S gets at the predicted spin, and whether the slow "
+                        "flow holds at the threshold (eps 0.01)")
+    p.add_argument("--top", action="store_true",
+                   help="also the initial spin that reaches the top with friction's work counted (C7, the slow flow "
+                        "at eps 0.01: seconds) against the full model's threshold for r + 0.99 e (bisection at the "
+                        "full model's eps)")
     p.add_argument("--json", action="store_true",
                    help='print one JSON object: {"omega_critical": ..., "initial_spin_threshold": ..., ...} in rad/s')
     add_disk(p)
@@ -65,24 +69,28 @@ def critical_spin(args) -> int:
         if out["initial_spin_threshold"]:
             out["height_at_prediction"] = inversion.highest_point(out["initial_spin_threshold"], setup=setup,
                                                                   gamma0=gamma0).height
-        work = inversion_energy.spin_with_friction_work(setup, gamma0)
-        out["initial_spin_with_friction_work"] = work.spin if work.status == "completed" else None
-        out["friction_work"] = work.run.work if work.status == "completed" else None
-        out["friction_work_status"], out["friction_work_message"] = work.status, work.message
-        top = inversion.spin_threshold(setup=setup, gamma0=gamma0, bracket=(low, 2.0 * low), scan=11, xtol=1e-3,
-                                       height=TOP)
-        out["full_model_top_threshold"] = top.spin if top.status == "completed" else None
         if th.status == "completed":
             check = inversion.check_reduction(th.high, setup, gamma0)
             out["reduction_holds"] = check.holds
             out["reduction_check"] = {"eps": inversion.REDUCTION_EPS, "spin": th.high,
                                       "slow_flow_height": check.slow.height, "slow_flow_ending": check.slow.status,
                                       "slow_flow_end_time": check.slow.t_end, "full_model_height": check.full.height}
+    if args.top and out["initial_spin_threshold"]:
+        work = inversion_energy.spin_with_friction_work(setup, gamma0)
+        out["initial_spin_with_friction_work"] = work.spin if work.status == "completed" else None
+        out["friction_work"] = work.run.work if work.status == "completed" else None
+        out["friction_work_status"], out["friction_work_message"] = work.status, work.message
+        low = out["initial_spin_threshold"]
+        reach = inversion.spin_threshold(setup=setup, gamma0=gamma0, bracket=(low, 1.3 * low), scan=11, xtol=1e-3,
+                                         height=TOP)
+        out["full_model_top_threshold"] = reach.spin if reach.status == "completed" else None
+        out["full_model_top_message"] = reach.message
     if args.json:
         print(json.dumps(out))
     else:
         print(_text(out))
-    failed = found.status != "completed" or (args.simulate and out["full_model_status"] != "completed")
+    failed = (found.status != "completed" or (args.simulate and out["full_model_status"] != "completed")
+              or (args.top and out.get("full_model_top_threshold") is None))
     return 1 if failed else 0
 
 
@@ -115,14 +123,6 @@ def _text(out: dict) -> str:
             lines.append(f"full model (ODE Model 1, eps {out['eps']:g} m/s, mu {out['mu']:g}): inverts above "
                          f"{full:.4f} rad/s, {diff:+.4f} rad/s ({100 * diff / predicted:+.2f} % of the prediction) "
                          "above it")
-        if out.get("initial_spin_with_friction_work") is not None:
-            c7, top = out["initial_spin_with_friction_work"], out["full_model_top_threshold"]
-            versus = (f"; the full model reaches r + {TOP} e above {top:.4f} rad/s ({100 * (c7 / top - 1):+.2f} %)"
-                      if top is not None else f"; the full model's threshold for r + {TOP} e was not found")
-            lines.append(f"with friction's work along the slow flow (C7, {1e3 * out['friction_work']:.4g} mJ): "
-                         f"{c7:.4f} rad/s reaches the top" + versus)
-        elif "friction_work_status" in out:
-            lines.append(f"with friction's work (C7): {out['friction_work_status']}: {out['friction_work_message']}")
         if "height_at_prediction" in out:
             lines.append(f"at the predicted spin S gets to r + {out['height_at_prediction']:.3f} e (the criterion: "
                          "r + 0.8 e; docs/inversion.md, How high S gets)")
@@ -134,4 +134,13 @@ def _text(out: dict) -> str:
             lines.append(f"the slow flow at {c['spin']:.4f} rad/s, eps {c['eps']:g} m/s, gets S to "
                          f"r + {c['slow_flow_height']:.3f} e, ODE Model 1 to r + {c['full_model_height']:.3f} e: the "
                          f"reduction {verdict}")
+    if out.get("initial_spin_with_friction_work") is not None:
+        c7, reach = out["initial_spin_with_friction_work"], out["full_model_top_threshold"]
+        versus = (f"; ODE Model 1 (eps {out['eps']:g} m/s) gets S to r + {TOP} e above {reach:.4f} rad/s "
+                  f"((C7) {100 * (c7 / reach - 1):+.2f} % off it)" if reach is not None else
+                  f"; ODE Model 1's threshold for r + {TOP} e: {out['full_model_top_message']}")
+        lines.append(f"with friction's work along the slow flow (C7, {1e3 * out['friction_work']:.4g} mJ up to "
+                     f"omega_c): {c7:.4f} rad/s reaches the top" + versus)
+    elif "friction_work_status" in out:
+        lines.append(f"with friction's work (C7): {out['friction_work_status']}: {out['friction_work_message']}")
     return "\n".join(lines)
