@@ -2,8 +2,8 @@
 
 Criterion: a start *inverts* when the height of S, z_S, exceeds r + 0.8 e (INVERSION_HEIGHT) within the
 horizon, 150 s at eps = 0.1 m/s and growing like 1/eps below it (:func:`horizon`: the drift that inverts the
-disk is O(eps)). Starts: Table 3's (upright, gamma0, beta_dot = 0, no spin about the disk normal, no slip)
-with the initial spin alpha_dot given. A heyoka event finds the crossing, so a run's time is exact.
+disk is O(eps)); ``height`` sets another level (0.99: the top). Starts: Table 3's (upright, gamma0,
+beta_dot = 0, no spin about the disk normal, no slip) with the initial spin alpha_dot given. A heyoka event finds the crossing, so a run's time is exact.
 
 Models (MODELS):
 * ``smooth``: ODE Model 1, symmetry-reduced (:mod:`tippedisk_analysis.models.reduced`: the contact exact);

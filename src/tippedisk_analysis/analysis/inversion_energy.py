@@ -8,7 +8,8 @@ event, at t*), and W(s) = E_tot(0) - E_tot(t*) [J]. The predicted spin solves
 
     E_0(s) - W(s) = E_spin(omega_c),                                                             (C7)
 
-E_0(s) = T_1 s^2 + E_pot the start's energy (T_1: its kinetic energy at 1 rad/s; (C5) is (C7) with W = 0). So
+E_0(s) = T_1 s^2 + E_pot the start's energy (T_1: its kinetic energy at 1 rad/s; taken as the slow flow's E_tot,
+which adds the slip's O(eps^2) kinetic energy; (C5) is (C7) with W = 0). So
 the disk arrives at omega_c with the inverted spin's energy: (C7) predicts the spin that reaches the top
 (z_S -> r + e), which the full model approaches as its threshold for r + 0.99 e. W is O(eps) power over a time
 O(1/eps), so (C7) hardly depends on eps; the slow flow needs a small one (REDUCTION_EPS) to hold.
@@ -19,7 +20,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numpy as np
 from scipy.optimize import brentq
 
 from ..dynamics.poincare import crossings
