@@ -173,7 +173,7 @@ def _api_pages() -> dict:
                 "Every function and class that a public module lists in `__all__`, with its docstring, a page per "
                 "module. Modules not listed here (the analysis modules' helpers, models, the CLI) are internal.", "",
                 "| module | contents |", "|---|---|"]
-    pages = {}
+    pages, documented = {}, set()  # an object a second module re-exports is described once (:no-index: after)
     examples = _api_examples()
     for module_name, title in API_MODULES:
         module = importlib.import_module(module_name)
@@ -196,8 +196,11 @@ def _api_pages() -> dict:
         for name in names:
             obj = getattr(module, name)
             kind = "autoclass" if isinstance(obj, type) else "autofunction"
+            target = f"{obj.__module__}.{obj.__qualname__}"
             members = ["   :members:"] if kind == "autoclass" and not issubclass(obj, Exception) else []
-            lines += ["```{eval-rst}", f".. {kind}:: {obj.__module__}.{obj.__qualname__}", *members, "```", ""]
+            members += ["   :no-index:"] if target in documented else []
+            documented.add(target)
+            lines += ["```{eval-rst}", f".. {kind}:: {target}", *members, "```", ""]
         pages[f"api/{slug}.md"] = "\n".join(lines)
     overview += ["", "```{toctree}", ":hidden:", "", *(p.removesuffix(".md") for p in pages), "```", ""]
     return {"api.md": "\n".join(overview), **pages}
