@@ -4,6 +4,8 @@ solid, unstable dashed), its Floquet multipliers in the unit circle and orbits; 
 
 from __future__ import annotations
 
+import re
+
 import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
@@ -134,7 +136,7 @@ def _search_figure(ds: xr.Dataset):
     states = [str(s) for s in ds["state"].values]
     ax.set(xlabel=states[i], ylabel=states[j], title="last iterate over its period")
     ax.legend()
-    fig.suptitle(ds.attrs.get("message", "")[:160], wrap=True)
+    fig.suptitle(re.split(r"(?<=[a-z)]\.)\s", ds.attrs.get("message", ""))[0], wrap=True)  # its first sentence, whole
     return fig
 
 

@@ -22,7 +22,7 @@ from ..kinematics import rotation_from_euler
 from ..results import config_of
 from .labels import ending
 from .registry import figure
-from .style import stacked, styled
+from .style import size, stacked, styled
 
 TIME_LABEL = "time t [s]"
 
@@ -168,7 +168,7 @@ def draw_convergence(ax, ds: xr.Dataset) -> None:
 
 @figure("rolling_convergence")
 def rolling_convergence_figure(ds: xr.Dataset):
-    fig, ax = plt.subplots(figsize=(6, 4.5), constrained_layout=True)
+    fig, ax = plt.subplots(figsize=size(1, 5.0), constrained_layout=True)
     draw_convergence(ax, ds)
     ax.set_title("Moreau Model 1 against hybrid-euler (h1)")
     return fig
