@@ -31,7 +31,7 @@ _PUBLIC = {
     "drift_at": "melnikov",
     "branch_dataset": "orbit_datasets", "orbits_dataset": "orbit_datasets", "orbit_from_dataset": "orbit_datasets",
     # Lyapunov exponents, Poincaré sections, attractors, sweeps
-    "lyapunov_spectrum": "lyapunov", "poincare_section": "poincare", "basins": "attractors.system_problem",
+    "lyapunov_spectrum": "lyapunov", "poincare_section": "poincare", "basins": "attractors.system_basins",
     "Grid": "attractors.records", "Sweep": "sweeps", "run_sweep": "sweeps",
     # hybrid (event-driven) and Filippov systems
     "HybridSystem": "hybrid", "Guard": "hybrid", "Jump": "hybrid", "simulate_hybrid": "hybrid",

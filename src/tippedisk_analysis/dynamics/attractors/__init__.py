@@ -4,7 +4,7 @@ Modules: :mod:`.records` (grid, settings, descriptions), :mod:`.problem` (the co
 description), :mod:`.mapping` (the state machine), :mod:`.tables` (merging, matching, columns), :mod:`.sets`
 (attractors compared as sets), :mod:`.confirm` (assignments confirmed in the full state where the grid is a
 projection), :mod:`.system_problem` (the problem of any
-:class:`~tippedisk_analysis.dynamics.System` and its basins), :mod:`.conservative` (the volume test: conservative
+:class:`~tippedisk_analysis.dynamics.System`), :mod:`.system_basins` (its basins), :mod:`.conservative` (the volume test: conservative
 flows have no attractors).
 
 The method is the one of Datseris & Wagemakers (Chaos 32, 023104, 2022) used by Attractors.jl's

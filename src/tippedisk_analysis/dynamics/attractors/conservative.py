@@ -1,4 +1,4 @@
-"""Conservative flows have no attractors: the volume test of :func:`.system_problem.basins`, and what it stores per
+"""Conservative flows have no attractors: the volume test of :func:`.system_basins.basins`, and what it stores per
 start in their place.
 
 Liouville: a flow x' = f(x) changes phase-space volume at the rate div f = tr(df/dx). Where its time average along
