@@ -147,7 +147,7 @@ from tippedisk_analysis.parameters import Disk
 
 found = cs.omega_critical()  # Tables 1-2: the nutation of the inverted spin is damped above omega_c
 print(found.message)
-# the initial spin Table 3's start needs to reach that spin (friction's losses neglected: a lower bound)
+# the initial spin whose rolling energy equals the inverted spin's at omega_c (friction's losses neglected; not a bound)
 print(cs.initial_spin_threshold(found.omega_critical))
 # the answer checks itself: Re lambda / eps of the slow flow's nutation at omega_c (heyoka's Jacobian)
 print(cs.check_against_jacobian(found.omega_critical))

@@ -106,7 +106,7 @@ def figure(ds, grid, path: Path) -> None:
     span = np.array([min(full[pick].min(), ds.predicted_threshold.values[pick].min()) - 1, full[pick].max() + 1])
     ax[3].plot(span, span, "k:", label="full model = prediction")
     ax[3].set(xlabel="predicted threshold (C5) [rad/s]", ylabel="ODE Model 1 threshold [rad/s]",
-              title="every disk and eps: the prediction is a lower bound")
+              title="every disk and eps: the prediction lies below the threshold")
     finish(fig, (ax[0], ax[1], ax[3]), path)
 
 
