@@ -10,6 +10,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from tippedisk_analysis import Friction, Setup, results, simulate
+from tippedisk_analysis.plotting import style
 from tippedisk_analysis.solvers.moreau.models import MODELS, QUATERNION
 
 # ----------------------------------------------------------------------------- the Coulomb-Contensou variant
@@ -60,13 +61,15 @@ def run(out: Path, model: str, t_end: float, tag: str = "", **options):
 
 
 def save(fig, path: Path) -> None:
-    fig.savefig(path, dpi=120)
+    """``fig`` to ``path`` at 120 dpi, closed; a PNG records its smallest text and width as plot_dataset's do."""
+    metadata = {"Description": style.describe(fig)} if Path(path).suffix == ".png" else None
+    fig.savefig(path, dpi=120, metadata=metadata)
     plt.close(fig)
     print(f"figure: {path}")
 
 
-def finish(fig, axes, path: Path, fontsize: float = 8) -> None:
-    """A legend and a light grid on each of ``axes``, then :func:`save`."""
+def finish(fig, axes, path: Path, fontsize: float | None = 8) -> None:
+    """A legend (``fontsize`` [pt]; None: the rc style's) and a light grid on each of ``axes``, then :func:`save`."""
     for a in axes:
         a.legend(fontsize=fontsize)
         a.grid(alpha=0.3)

@@ -18,7 +18,6 @@ import json
 import sys
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 from tippedisk_studies._common import finish, prepare
@@ -28,6 +27,7 @@ from tippedisk_analysis.analysis import critical_spin as cs
 from tippedisk_analysis.analysis import inversion
 from tippedisk_analysis.errors import DatasetError
 from tippedisk_analysis.parameters import InitialState
+from tippedisk_analysis.plotting import style
 from tippedisk_analysis.results import make_attrs
 
 SPINS = np.round(np.arange(31.5, 35.501, 0.025), 3)  # rad/s, Tables 1-2 disk
@@ -168,31 +168,42 @@ def _label(tag: str) -> str:
     return rf"{'slow flow' if tag.startswith('slow') else 'ODE Model 1'}, $\varepsilon$ = {eps} m s$^{{-1}}$"
 
 
+@style.styled
 def figure(results: dict, path: Path) -> None:
     """Stacked: S's highest point over the initial spin (Tables 1-2 disk), its distance from the top, and the
     drilled disks' over the initial spin scaled by their (C5)."""
-    with plt.rc_context({"font.size": 11, "legend.fontsize": 9.5}):
-        fig, ax = plt.subplots(3, 1, figsize=(8.5, 11.5), constrained_layout=True)
-        for tag, (ds, predicted) in results.items():
-            w, h = ds.spin.values, ds.height.values
-            if tag.startswith("drilled"):
-                ax[2].plot(w / predicted, h, ".-", ms=2, lw=0.8, label=_label(tag))
-                continue
-            ax[0].plot(w, h, ".-", ms=2, lw=0.8, label=_label(tag))
-            ax[1].semilogy(w, np.maximum(1.0 - h, 1e-12), ".-", ms=2, lw=0.8, label=_label(tag))
-        predicted = next(p for tag, (_ds, p) in results.items() if not tag.startswith("drilled"))
-        height = r"highest $(z_S - r)/e$"
-        for a in ax[:2]:
-            a.axvline(predicted, color="k", ls=":", label="closed form (C5)")
-            a.set_xlabel(r"initial spin $\dot\alpha(0)$ [rad s$^{-1}$]")
-        ax[0].axhline(inversion.INVERSION_HEIGHT, color="grey", ls="--", label=r"criterion $z_S = r + 0.8e$")
-        ax[0].set(ylabel=height, title="the Tables 1-2 disk from Table 3's start")
-        ax[1].axhline(1.0 - inversion.INVERSION_HEIGHT, color="grey", ls="--", label="criterion")
-        ax[1].set(ylabel=f"1 $-$ {height}", title="the same: its distance from the top")
-        ax[2].axvline(1.0, color="k", ls=":", label="closed form (C5)")
-        ax[2].axhline(inversion.INVERSION_HEIGHT, color="grey", ls="--", label="criterion")
-        ax[2].set(xlabel=r"initial spin / its closed form (C5)", ylabel=height, title="drilled disks")
-        finish(fig, ax, path, fontsize=9.5)
+    fig, ax = style.stacked(3, panel_height=3.8)
+    for tag, (ds, predicted) in results.items():
+        w, h = ds.spin.values, ds.height.values
+        if tag.startswith("drilled"):
+            ax[2].plot(w / predicted, h, ".-", ms=2, lw=0.8, label=_label(tag))
+            continue
+        ax[0].plot(w, h, ".-", ms=2, lw=0.8, label=_label(tag))
+        ax[1].semilogy(w, np.maximum(1.0 - h, 1e-12), ".-", ms=2, lw=0.8, label=_label(tag))
+    predicted = next(p for tag, (_ds, p) in results.items() if not tag.startswith("drilled"))
+    height = r"highest $(z_S - r)/e$"
+    for a in ax[:2]:
+        a.axvline(predicted, color="k", ls=":", label="closed form (C5)")
+        a.set_xlabel(r"initial spin $\dot\alpha(0)$ [rad s$^{-1}$]")
+    ax[0].axhline(inversion.INVERSION_HEIGHT, color="grey", ls="--", label=r"criterion $z_S = r + 0.8e$")
+    ax[0].set(ylabel=height, title="the Tables 1-2 disk from Table 3's start")
+    ax[1].axhline(1.0 - inversion.INVERSION_HEIGHT, color="grey", ls="--", label="criterion")
+    ax[1].set(ylabel=f"1 $-$ {height}", title="the same: its distance from the top")
+    ax[2].axvline(1.0, color="k", ls=":", label="closed form (C5)")
+    ax[2].axhline(inversion.INVERSION_HEIGHT, color="grey", ls="--", label="criterion")
+    ax[2].set(xlabel=r"initial spin / its closed form (C5)", ylabel=height, title="drilled disks")
+    finish(fig, ax, path, fontsize=None)
+
+
+def redraw(data_dir: str = "data/inversion", figure_dir: str = "docs/figures") -> Path:
+    """highest_point.png again from the stored curves (highest_point_<curve>.nc in ``data_dir``), nothing rerun."""
+    results = {}
+    for tag, (_model, setup, _spins) in curves(quick=False).items():
+        predicted = cs.initial_spin_threshold(cs.omega_critical(setup.disk).omega_critical, setup)
+        results[tag] = (td.load(Path(data_dir) / f"highest_point_{tag}.nc"), predicted)
+    path = Path(figure_dir) / "highest_point.png"
+    figure(results, path)
+    return path
 
 
 def main(output_dir: str = "output", quick: bool = False) -> Path:
