@@ -21,7 +21,6 @@ import dataclasses
 import sys
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 from tippedisk_studies._common import finish, prepare
 
@@ -30,6 +29,7 @@ from tippedisk_analysis import dynamics as dy
 from tippedisk_analysis.analysis import critical_spin as cs
 from tippedisk_analysis.analysis import inversion
 from tippedisk_analysis.models import held_spin
+from tippedisk_analysis.plotting import style
 
 BRANCH_EPS = 0.005  # m/s
 THRESHOLD_EPS = (0.01, 0.005)  # m/s
@@ -83,47 +83,48 @@ def closed_form(name: str, values) -> np.ndarray:
     return np.array([cs.omega_critical(dataclasses.replace(disk, **{name: float(v)})).omega_critical for v in values])
 
 
-READABLE = {"font.size": 11, "legend.fontsize": 9.5}  # stacked panels 8.5 in wide: text as large as the page's
 RATE = r"[rad s$^{-1}$]"
 
 
+@style.styled
 def curves_figure(found: dict, saddle, path: Path) -> None:
     """The damped window over e (HOPF2 up to BP1) above the critical spin over r and over mu, each against its
     closed form."""
-    with plt.rc_context(READABLE):
-        fig, ax = plt.subplots(3, 1, figsize=(8.5, 11), constrained_layout=True)
-        ax[0].plot(saddle.e.values * 1e3, saddle.spin.values, "C3", label="BP1: the inverted spin turns into a saddle")
-        marks = np.linspace(saddle.e.values.min(), saddle.e.values.max(), 10)
-        ax[0].plot(marks * 1e3, [cs.saddle_spins(td.Disk(e=float(v)))[0] for v in marks], "ks", ms=4, mfc="none",
-                   label=r"closed form $c_0 = 0$ (C6)")
-        units = {"e": (r"eccentricity $e$ [mm]", 1e3), "r": (r"radius $r$ [mm]", 1e3),
-                 "mu": (r"friction coefficient $\mu$", 1.0)}
-        titles = {"e": r"the damped window over $e$: from HOPF2 ($\omega_c$) up to BP1 (the saddle)",
-                  "r": r"the critical spin over $r$", "mu": r"the critical spin over $\mu$"}
-        for a, (name, curve) in zip(ax, found.items()):
-            label, scale = units[name]
-            a.plot(curve[name].values * scale, curve.spin.values, "C0",
-                   label=rf"HOPF2 of the held model, $\varepsilon$ = {BRANCH_EPS:g} m s$^{{-1}}$")
-            marks = np.linspace(curve[name].values.min(), curve[name].values.max(), 12)
-            a.plot(marks * scale, closed_form(name, marks), "ko", ms=4, mfc="none", label=r"closed form $\omega_c$ (C4)")
-            for i, lab in zip(curve.special_index.values, curve.special_label.values):
-                a.plot(curve[name].values[i] * scale, curve.spin.values[i], "kD")
-                a.annotate(str(lab), (curve[name].values[i] * scale, curve.spin.values[i]), textcoords="offset points",
-                           xytext=(5, -12))
-            a.set(xlabel=label, ylabel=f"critical spin {RATE}", title=titles[name])
-            a.ticklabel_format(axis="y", useOffset=False)
-        finish(fig, ax, path, fontsize=READABLE["legend.fontsize"])
+    fig, ax = style.stacked(3, panel_height=3.8)
+    ax[0].plot(saddle.e.values * 1e3, saddle.spin.values, "C3", label="BP1: the inverted spin turns into a saddle")
+    marks = np.linspace(saddle.e.values.min(), saddle.e.values.max(), 10)
+    ax[0].plot(marks * 1e3, [cs.saddle_spins(td.Disk(e=float(v)))[0] for v in marks], "ks", ms=4, mfc="none",
+               label=r"closed form $c_0 = 0$ (C6)")
+    units = {"e": (r"eccentricity $e$ [mm]", 1e3), "r": (r"radius $r$ [mm]", 1e3),
+             "mu": (r"friction coefficient $\mu$", 1.0)}
+    titles = {"e": r"the damped window over $e$: from HOPF2 ($\omega_c$) up to BP1 (the saddle)",
+              "r": r"the critical spin over $r$", "mu": r"the critical spin over $\mu$"}
+    for a, (name, curve) in zip(ax, found.items()):
+        label, scale = units[name]
+        a.plot(curve[name].values * scale, curve.spin.values, "C0",
+               label=rf"HOPF2 of the held model, $\varepsilon$ = {BRANCH_EPS:g} m s$^{{-1}}$")
+        marks = np.linspace(curve[name].values.min(), curve[name].values.max(), 12)
+        a.plot(marks * scale, closed_form(name, marks), "ko", ms=4, mfc="none", label=r"closed form $\omega_c$ (C4)")
+        for i, lab in zip(curve.special_index.values, curve.special_label.values):
+            a.plot(curve[name].values[i] * scale, curve.spin.values[i], "kD")
+            a.annotate(str(lab), (curve[name].values[i] * scale, curve.spin.values[i]), textcoords="offset points",
+                       xytext=(5, -12))
+        a.set(xlabel=label, ylabel=f"critical spin {RATE}", title=titles[name])
+        a.ticklabel_format(axis="y", useOffset=False)
+    finish(fig, ax, path, fontsize=None)
 
 
+@style.styled
 def figure(br, ds, path: Path) -> None:
     """Stacked: the real parts along the held branch against (C3); how each run from Table 3's start ends over the
     held spin; the height of S in two runs either side of the threshold."""
-    with plt.rc_context(READABLE):
-        fig, ax = plt.subplots(3, 1, figsize=(8.5, 12), constrained_layout=True)
-        _branch_panel(ax[0], br)
-        _runs_panel(ax[1], ds)
-        _heights_panel(ax[2], ds)
-        finish(fig, ax, path, fontsize=READABLE["legend.fontsize"])
+    fig, ax = style.stacked(3, panel_height=4.0)
+    _branch_panel(ax[0], br)
+    _runs_panel(ax[1], ds)
+    _heights_panel(ax[2], ds)
+    ax[1].legend(ncol=2, loc="lower right")  # below the runs, which end after 3 s or later
+    ax[1].grid(alpha=0.3)
+    finish(fig, (ax[0], ax[2]), path, fontsize=None)
 
 
 def _branch_panel(a, br) -> None:
@@ -156,7 +157,7 @@ def _runs_panel(a, ds) -> None:
                 a.semilogy(spins[pick], times[pick], marker, color=color, mfc="none" if i else color,
                            label=rf"{status.replace('_', ' ')}, $\varepsilon$ = {eps_i:g} m s$^{{-1}}$")
     a.axvline(found.omega_critical, color="k", ls=":", label=rf"$\omega_c$ = {found.omega_critical:.2f} rad s$^{{-1}}$")
-    a.set(xlabel=f"held spin {RATE}", ylabel="time the run ended [s]",
+    a.set(xlabel=f"held spin {RATE}", ylabel="time the run ended [s]", ylim=(0.05, 300),
           title="Table 3's start at a held spin: how each run ends")
 
 
@@ -176,6 +177,16 @@ def _heights_panel(a, ds) -> None:
     a.axhline(inversion.INVERSION_HEIGHT, color="grey", ls="--", label=r"criterion $z_S = r + 0.8e$")
     a.set(xlabel=r"$t$ [s]", ylabel=r"$(z_S - r)/e$", ylim=(-3, 1.2),
           title=rf"the held model from Table 3's start, $\varepsilon$ = {BRANCH_EPS:g} m s$^{{-1}}$")
+
+
+def redraw(data_dir: str = "data/inversion", figure_dir: str = "docs/figures") -> list[Path]:
+    """held_spin.png and held_spin_curves.png again from the stored datasets in ``data_dir`` (the two runs either
+    side of the threshold and the closed form's marks are recomputed: seconds)."""
+    data, figures = Path(data_dir), Path(figure_dir)
+    figure(td.load(data / "held_spin_branch.nc"), td.load(data / "held_spin_thresholds.nc"), figures / "held_spin.png")
+    found = {name: td.load(data / f"held_spin_hopf2_{name}.nc") for name in CURVES}
+    curves_figure(found, td.load(data / "held_spin_bp1_e.nc"), figures / "held_spin_curves.png")
+    return [figures / "held_spin.png", figures / "held_spin_curves.png"]
 
 
 def main(output_dir: str = "output", quick: bool = False) -> Path:
