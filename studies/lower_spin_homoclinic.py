@@ -16,16 +16,16 @@ import math
 import sys
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
-from tippedisk_studies._common import prepare
+from tippedisk_studies._common import prepare, save
 
 import tippedisk_analysis as td
 from tippedisk_analysis import dynamics as dy
 from tippedisk_analysis.analysis import critical_spin as cs
 from tippedisk_analysis.analysis import nutation_cycles as nc
 from tippedisk_analysis.models import held_spin
+from tippedisk_analysis.plotting import style
 from tippedisk_analysis.results import make_attrs
 
 EPS_VALUES = (0.01, 0.0075, 0.005, 0.0035, 0.0025, 0.0018, 0.00125, 0.001, 0.00095, 0.0009, 0.00089, 0.00088,
@@ -142,32 +142,39 @@ def dataset(rows: list, eps_values, spins, curves: dict, times: np.ndarray, stat
     return ds
 
 
+@style.styled
 def figure(ds: xr.Dataset, path: Path) -> None:
-    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2))
+    """Stacked: the held spin of the homoclinic orbit over eps; the orbit at ORBIT_EPS over time."""
+    fig, (top, bottom) = style.stacked(2, panel_height=4.2)
     branches = ((1, "o-", "homoclinic orbit of the lower spin"), (0, "s--", "its branch below the fold"))
-    for flag, style, label in branches:
+    for flag, line, label in branches:
         on = ds.upper.values == flag
-        left.semilogx(ds.orbit_eps[on], ds.homoclinic_spin[on], style, color="C3", ms=4, label=label)
-    left.axhline(ds.attrs["omega_critical"], ls="--", color="C0", label=r"$\omega_c$ (C4)")
-    left.axhline(ds.attrs["reversible_homoclinic_spin"], ls=":", color="k",
-                 label=r"the lower spin's homoclinic orbit at $\varepsilon = 0$")
-    left.set(xlabel=r"$\varepsilon$ [m/s]", ylabel="held spin [rad/s]", ylim=(26.8, 33.8),
-             title="held model, Tables 1-2 disk")
-    left.legend(loc="center right", fontsize=8)
+        top.semilogx(ds.orbit_eps[on], ds.homoclinic_spin[on], line, color="C3", ms=4, label=label)
+    top.axhline(ds.attrs["omega_critical"], ls="--", color="C0", label=r"$\omega_c$ (C4)")
+    top.axhline(ds.attrs["reversible_homoclinic_spin"], ls=":", color="k",
+                label=r"homoclinic orbit at $\varepsilon = 0$")
+    top.set(xlabel=r"$\varepsilon$ [m s$^{-1}$]", ylabel=r"held spin [rad s$^{-1}$]", ylim=(26.8, 33.8),
+            title="held model, Tables 1-2 disk")
+    top.legend(loc="lower right")
     t = ds.orbit_time.values
-    right.plot(t, 0.5 * math.pi - ds.orbit_gamma - 2.0 * math.pi, color="C3")
-    right.axhline(0.0, color="0.6", lw=0.6)
-    right.set(xlabel="time [s] (at 0 the orbit is back at the lower spin)",
-              ylabel=r"S's angle from the top, $\pi/2 - \gamma$ [rad]", yticks=[-math.pi, 0, math.pi],
-              yticklabels=[r"$-\pi$ (lower spin)", "0 (top)", r"$\pi$ (lower spin)"],
-              title=f"the orbit at {ds.attrs['orbit_spin']:.4f} rad/s, "
-                    rf"$\varepsilon$ = {ds.attrs['orbit_eps']:g} m/s")
-    twin = right.twinx()
+    bottom.plot(t, 0.5 * math.pi - ds.orbit_gamma - 2.0 * math.pi, color="C3")
+    bottom.axhline(0.0, color="0.6", lw=0.6)
+    bottom.set(xlabel=r"$t$ [s] (at 0 the orbit is back at the lower spin)",
+               ylabel=r"S from the top, $\pi/2 - \gamma$ [rad]", yticks=[-math.pi, 0, math.pi],
+               yticklabels=[r"$-\pi$ (lower)", "0 (top)", r"$\pi$ (lower)"],
+               title=rf"the orbit at {ds.attrs['orbit_spin']:.4f} rad s$^{{-1}}$, "
+                     rf"$\varepsilon$ = {ds.attrs['orbit_eps']:g} m s$^{{-1}}$")
+    twin = bottom.twinx()
     twin.plot(t, ds.orbit_beta - 0.5 * math.pi, color="C0", lw=0.8)
     twin.set_ylabel(r"tilt $\beta - \pi/2$ [rad]", color="C0")
-    fig.tight_layout()
-    fig.savefig(path, dpi=130)
-    plt.close(fig)
+    save(fig, path)
+
+
+def redraw(data_dir: str = "data/inversion", figure_dir: str = "docs/figures") -> Path:
+    """lower_spin_homoclinic.png again from the stored lower_spin_homoclinic.nc in ``data_dir``."""
+    path = Path(figure_dir) / "lower_spin_homoclinic.png"
+    figure(td.load(Path(data_dir) / "lower_spin_homoclinic.nc"), path)
+    return path
 
 
 def main(output_dir: str = "output", quick: bool = False) -> Path:
