@@ -13,15 +13,15 @@ family, and from the Poincaré returns (beta_dot = 0) of Table 3 runs, with the 
 import sys
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
+from tippedisk_studies._common import save
 
 import tippedisk_analysis as td
 from tippedisk_analysis.dynamics import continuation as co
 from tippedisk_analysis import dynamics as dy
 from tippedisk_analysis.analysis import orbits
 from tippedisk_analysis.analysis import spin_continuation as sc
-from tippedisk_analysis.plotting import plot_dataset
+from tippedisk_analysis.plotting import plot_dataset, style
 
 
 def main(output_dir: str = "output", quick: bool = False) -> Path:
@@ -93,34 +93,44 @@ def _print_returns(runs: dict) -> None:
                   "decaying oscillation, not a cycle)")
 
 
+@style.styled
 def _summary_figure(bautin, roessler, doubled, runs, path: Path) -> None:
-    fig, axes = plt.subplots(2, 2, figsize=(12, 9), constrained_layout=True)
-    for ax, ds, title in ((axes[0, 0], bautin, "Bautin normal form: fold of cycles LP at beta = -1/4"),):
-        ax.axhline(0.0, color="0.6", lw=1.0, label="equilibrium")
-        _branch(ax, ds, "beta")
-        ax.set(title=title, xlabel="beta", ylabel="amplitude")
-        ax.legend(fontsize=8)
-    ax = axes[0, 1]
+    """Stacked: the Bautin fold of cycles; Roessler's period doubling; the energy lost per return and the return
+    time of the Table 3 runs (no periodic orbit with friction)."""
+    fig, axes = style.stacked(4, panel_height=3.6)
+    ax = axes[0]
+    ax.axhline(0.0, color="0.6", lw=1.0, label="equilibrium")
+    _branch(ax, bautin, "beta")
+    ax.set(title=r"Bautin normal form: fold of cycles LP at $\beta = -1/4$", xlabel=r"$\beta$", ylabel="amplitude")
+    ax = axes[1]
     _branch(ax, roessler, "c", label="period 1")
     _branch(ax, doubled, "c", color="tab:blue", label="period 2 (switched at PD1)")
-    ax.set(title="Roessler (a = b = 0.2): period doubling", xlabel="c", ylabel="amplitude")
-    ax.legend(fontsize=8)
-    ax = axes[1, 0]
+    ax.set(title=r"Roessler ($a = b = 0.2$): period doubling", xlabel=r"$c$", ylabel="amplitude")
+    ax = axes[2]
     for eps, ds in runs.items():
         dE = -ds.return_energy_change.values[:-1]
-        ax.semilogy(ds.return_time.values[:-1], np.where(dE > 0, dE, np.nan), ".", ms=3, label=f"eps = {eps:g} m/s")
-    ax.set(title="tippedisk: energy lost per Poincaré return (beta_dot = 0), Table 3 start",
-           xlabel="time of the return [s]", ylabel="E_k - E_(k+1) [J]")
-    ax.legend(fontsize=8)
-    ax = axes[1, 1]
+        ax.semilogy(ds.return_time.values[:-1], np.where(dE > 0, dE, np.nan), ".", ms=3,
+                    label=rf"$\varepsilon$ = {eps:g} m s$^{{-1}}$")
+    ax.set(title=r"energy lost per return to $\dot\beta = 0$, Table 3 start",
+           xlabel="time of the return [s]", ylabel=r"$E_k - E_{k+1}$ [J]")
+    ax = axes[3]
     for eps, ds in runs.items():
-        ax.plot(ds.return_time.values[:-1], ds.return_period.values[:-1], ".", ms=3, label=f"eps = {eps:g} m/s")
-    ax.set(title="tippedisk: return times drift (no fixed period)", xlabel="time of the return [s]",
+        ax.plot(ds.return_time.values[:-1], ds.return_period.values[:-1], ".", ms=3,
+                label=rf"$\varepsilon$ = {eps:g} m s$^{{-1}}$")
+    ax.set(title="return times drift (no fixed period)", xlabel="time of the return [s]",
            ylabel="return time [s]", ylim=(0.1, 0.45))
-    ax.legend(fontsize=8)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    print(f"{path}: summary figure")
+    for ax in axes:
+        ax.legend()
+    save(fig, path)
+
+
+def redraw(data_dir: str = "data/periodic", figure_dir: str = "docs/figures") -> Path:
+    """periodic_orbits.png again from the stored branches and runs in ``data_dir``."""
+    data, path = Path(data_dir), Path(figure_dir) / "periodic_orbits.png"
+    runs = {eps: td.load(data / f"periodic_tippedisk_run_eps{eps:g}.nc") for eps in (0.25, 0.1)}
+    _summary_figure(*(td.load(data / f"periodic_{name}.nc") for name in ("bautin", "roessler", "roessler_doubled")),
+                    runs, path)
+    return path
 
 
 def _branch(ax, ds, name, color="k", label=None):
@@ -134,8 +144,7 @@ def _branch(ax, ds, name, color="k", label=None):
             start = i
     for lab, idx in zip(ds.special_label.values, ds.special_index.values):
         ax.plot(x[idx], amp[idx], "o", color="tab:red", ms=5)
-        ax.annotate(str(lab), (x[idx], amp[idx]), textcoords="offset points", xytext=(4, 5), fontsize=8,
-                    color="tab:red")
+        ax.annotate(str(lab), (x[idx], amp[idx]), textcoords="offset points", xytext=(4, 5), color="tab:red")
 
 
 if __name__ == "__main__":
