@@ -13,8 +13,8 @@ rolling_inversion.png, rolling_section.png, rolling_family.png.
 from __future__ import annotations
 
 import sys
+from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 from tippedisk_studies._common import prepare, save
@@ -23,6 +23,7 @@ import tippedisk_analysis as td
 from tippedisk_analysis import dynamics as dy
 from tippedisk_analysis.analysis import rolling as ar
 from tippedisk_analysis.dynamics.orbits import monodromy_fd
+from tippedisk_analysis.plotting import style
 from tippedisk_analysis.plotting.simulation import draw_convergence, shade_sliding
 from tippedisk_analysis.results import make_attrs
 
@@ -51,21 +52,23 @@ def convergence(runs: dict, hybrid: xr.Dataset) -> xr.Dataset:
                          "Moreau Model 1 against the event-driven model (hybrid-euler)"))
 
 
+@style.styled
 def inversion_figure(hybrid, m1, m2, conv):
-    fig, ax = plt.subplots(3, 1, figsize=(8, 8.5), constrained_layout=True)
-    for ds, label, style in ((hybrid, "hybrid-euler (h1)", "-"), (m1, "Moreau Model 1, dt = 1e-5 s", "--"),
-                             (m2, "Moreau Model 2, dt = 1e-5 s", ":")):
-        ax[0].plot(ds.time, ds.gamma, style, label=label)
-        ax[2].plot(ds.time, ds.E_tot, style, label=label)
+    """Stacked: gamma through the inversion, the Moreau error over its time step, the energy."""
+    fig, ax = style.stacked(3, panel_height=3.4)
+    for ds, label, line in ((hybrid, "hybrid-euler (h1)", "-"), (m1, r"Moreau Model 1, $\Delta t$ = 1e-5 s", "--"),
+                            (m2, r"Moreau Model 2, $\Delta t$ = 1e-5 s", ":")):
+        ax[0].plot(ds.time, ds.gamma, line, label=label)
+        ax[2].plot(ds.time, ds.E_tot, line, label=label)
     for a in (ax[0], ax[2]):
-        a.legend(fontsize=8)
-        a.set_xlabel("t [s]")
+        a.legend()
+        a.set_xlabel(r"$t$ [s]")
     shade_sliding([ax[0], ax[2]], hybrid)
     ax[0].set_xlim(0, 2)
-    ax[0].set_ylabel("gamma [rad]")
+    ax[0].set_ylabel(r"$\gamma$ [rad]")
     ax[0].set_title("through the inversion (shaded: h1 slides)")
     draw_convergence(ax[1], conv)
-    ax[2].set_ylabel("E_tot [J]")
+    ax[2].set_ylabel(r"$E_\mathrm{tot}$ [J]")
     ax[2].set_ylim(float(hybrid.E_tot[-1]) - 0.01, float(hybrid.E_tot[0]) + 0.005)
     return fig
 
@@ -80,8 +83,9 @@ def small_tori(orbit, t_end: float) -> list:
     return [(a, ar.section(x0 + a * v, t_end=t_end)) for a in SMALL_TORI]
 
 
+@style.styled
 def section_figure(orbit_ds, tori, orbit):
-    fig, ax = plt.subplots(figsize=(7, 5.5), constrained_layout=True)
+    fig, (ax,) = style.stacked(1, panel_height=5.5)
     names = list(orbit_ds.state.values)
     X = orbit_ds.return_state.values
     ib, iy = names.index("beta"), names.index("omega_y")
@@ -92,37 +96,62 @@ def section_figure(orbit_ds, tori, orbit):
         ax.plot(sec.beta, sec.omega_y, ".", ms=1.5, label=f"displaced {a:g} from the orbit ({m.kind}, "
                                                           f"{m.rotation_number:.6f})")
     x0 = orbit.states[0]
-    ax.plot(x0[0], x0[3], "k*", ms=10, label=f"elliptic orbit T = {orbit.period:.5f} s, Floquet angle "
+    ax.plot(x0[0], x0[3], "k*", ms=10, label=f"elliptic orbit, $T$ = {orbit.period:.5f} s, Floquet angle "
                                             f"{ar.floquet_angle(orbit):.6f}")
-    ax.set_xlabel("beta [rad]")
-    ax.set_ylabel("omega_y [rad/s]")
-    ax.set_title("returns of the rolling motion to gamma = pi/2 (upwards)")
-    ax.legend(fontsize=7)
+    ax.set_xlabel(r"$\beta$ [rad]")
+    ax.set_ylabel(r"$\omega_y$ [rad s$^{-1}$]")
+    ax.set_title(r"returns of the rolling motion to $\gamma = \pi/2$ (upwards)")
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.15), markerscale=4)
     return fig
 
 
+@style.styled
 def family_figure(families):
-    fig, ax = plt.subplots(2, 2, figsize=(10, 7), constrained_layout=True, sharex="col")
+    """Stacked, for the family in the energy then in the spin: the smallest cone margin and normal force on each
+    orbit, and its period."""
+    fig, ax = style.stacked(4, panel_height=3.6)
+    labels = {"E_tot": (r"$E_\mathrm{tot}$ [J] ($\omega_x$ at $x_0$ held)", "the family in the energy"),
+              "omega_x": (r"$\omega_x$ at the orbit's first point ($\gamma \approx \pi/2$) [rad s$^{-1}$] "
+                          r"($E_\mathrm{tot}$ held)", "the family in the spin")}
     for j, ds in enumerate(families):
         p = ds.attrs["parameter"]
         x = ds[p].values
-        ax[0, j].plot(x, ds.min_cone_margin, ".-", label="smallest mu lambda_N - |lambda_T| on the orbit")
-        ax[0, j].plot(x, ds.min_lambda_N, ".-", label="smallest lambda_N")
-        ax[0, j].axhline(0, color="k", lw=0.8)
-        for b in ar.consistency_boundary(ds):
-            ax[0, j].axvline(b, color="tab:red", ls=":", label=f"the cone margin crosses 0 at {b:.5g}")
+        xlabel, title = labels[p]
+        margin, period = ax[2 * j], ax[2 * j + 1]
+        margin.plot(x, ds.min_cone_margin, ".-", label=r"smallest $\mu\lambda_N - |\lambda_T|$")
+        margin.plot(x, ds.min_lambda_N, ".-", label=r"smallest $\lambda_N$")
+        margin.axhline(0, color="k", lw=0.8)
+        boundary = ar.consistency_boundary(ds)
+        for k, b in enumerate(boundary):
+            margin.axvline(b, color="tab:red", ls=":", label=None if k else
+                           "the cone margin crosses 0 at " + ", ".join(f"{v:.5g}" for v in boundary))
         start = float(x[np.argmin(np.abs(ds.arclength.values))])
-        ax[0, j].axvline(start, color="0.5", ls="--", label="the orbit at the torus's centre")
-        ax[0, j].set_ylabel("[N]")
-        ax[0, j].legend(fontsize=7)
-        ax[1, j].plot(x, ds.period, ".-")
-        ax[1, j].set_ylabel("period [s]")
-        ax[1, j].set_xlabel({"E_tot": "E_tot [J] (omega_x at x_0 held)",
-                             "omega_x": "omega_x at x_0, the orbit's first point (gamma ~ pi/2) [rad/s] (E_tot "
-                                        "held)"}[p])
-    ax[0, 0].set_title("the family in the energy")
-    ax[0, 1].set_title("the family in the spin")
+        margin.axvline(start, color="0.5", ls="--", label="the orbit at the torus's centre")
+        margin.set(ylabel="force on the orbit [N]", title=title, ylim=(None, 2.0 * float(ds.min_lambda_N.max())))
+        margin.legend(loc="upper left")
+        margin.sharex(period)
+        margin.tick_params(labelbottom=False)
+        period.plot(x, ds.period, ".-")
+        period.set(ylabel="period [s]", xlabel=xlabel)
     return fig
+
+
+def redraw(data_dir: str = "data/rolling", figure_dir: str = "docs/figures") -> list[Path]:
+    """rolling_section.png and rolling_family.png again from the stored datasets in ``data_dir`` (the central
+    orbit and the three small tori around it are recomputed: seconds)."""
+    data, figures = Path(data_dir), Path(figure_dir)
+    orbit_ds = td.load(data / "rolling_orbit.nc")
+    orbit = central_orbit(orbit_ds)
+    save(section_figure(orbit_ds, small_tori(orbit, 300.0), orbit), figures / "rolling_section.png")
+    families = [td.load(data / f"rolling_family_{name}.nc") for name in ("energy", "spin")]
+    save(family_figure(families), figures / "rolling_family.png")
+    return [figures / "rolling_section.png", figures / "rolling_family.png"]
+
+
+def central_orbit(orbit_ds):
+    """The elliptic periodic orbit at the torus's centre, found again from its stored start and period."""
+    return dy.find_orbit(ar.reduced_system(), orbit_ds.initial_state.values[0], float(orbit_ds.period[0]),
+                         orbit_ds.runtime_parameters.values[0], pinned=("omega_x",))
 
 
 def main(output_dir: str = "output", quick: bool = False):
@@ -142,9 +171,7 @@ def main(output_dir: str = "output", quick: bool = False):
     orbit_ds = ar.orbits_from_run(hybrid, returns_time=200.0 if quick else ar.RETURNS_TIME)
     td.save(orbit_ds, out / "rolling_orbit.nc")
     print(f"rolling_orbit: {orbit_ds.attrs['message']}")
-    orbit = dy.find_orbit(ar.reduced_system(), orbit_ds.initial_state.values[0],
-                                   float(orbit_ds.period[0]), orbit_ds.runtime_parameters.values[0],
-                                   pinned=("omega_x",))
+    orbit = central_orbit(orbit_ds)
     tori = small_tori(orbit, 200.0 if quick else 300.0)
     for a, sec in tori:
         print(f"displaced by {a:g}: {ar.identify(sec).message}")
