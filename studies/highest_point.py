@@ -163,7 +163,8 @@ def disks_dataset(rows: dict, used: dict, path: Path):
 def _label(tag: str) -> str:
     """A curve's legend entry: "eps0.01" -> ODE Model 1 at that eps, "slow_..." its slow flow, "drilled_e1.5mm"."""
     if tag.startswith("drilled"):
-        return rf"drilled disk, $e$ = {tag.removeprefix('drilled_e').removesuffix('mm')} mm, $\varepsilon$ = 0.1 m s$^{{-1}}$"
+        e = tag.removeprefix("drilled_e").removesuffix("mm")
+        return rf"drilled disk, $e$ = {e} mm, $\varepsilon$ = 0.1 m s$^{{-1}}$"
     eps = tag.rsplit("eps", 1)[1]
     return rf"{'slow flow' if tag.startswith('slow') else 'ODE Model 1'}, $\varepsilon$ = {eps} m s$^{{-1}}$"
 
