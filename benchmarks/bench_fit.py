@@ -86,10 +86,10 @@ def main() -> None:
             ("sensitivities, one solve", lambda: package(t, data, (1.0,))),
             ("finite differences 2-point on simulate", lambda: finite_differences(t, data, "2-point")),
             ("finite differences 3-point on simulate", lambda: finite_differences(t, data, "3-point"))]
-    print(f"{'method':44s} {'wall [s]':>9s} {'runs':>5s}  {'mu':>20s}  {'eps':>20s}  status")
+    print(f"{'method':44s} {'wall':>9s} {'runs':>5s}  {'mu':>20s}  {'eps':>20s}  status")
     for name, fn in rows:
         seconds, (est, err, runs, status) = best_of(fn, repeat)
-        print(f"{name:44s} {seconds:9.3f} {runs:5d}  {est[0]:.5f} +- {err[0]:.5f}  {est[1]:.5f} +- {err[1]:.5f}  "
+        print(f"{name:44s} {seconds:7.3f} s {runs:5d}  {est[0]:.5f} +- {err[0]:.5f}  {est[1]:.5f} +- {err[1]:.5f}  "
               f"{status}")
 
 

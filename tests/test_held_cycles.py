@@ -1,19 +1,16 @@
 """The held-spin model's cycles from HOPF1 of the inverted spin (eps = 0.01 m/s, Tables 1-2 disk) by collocation:
 the branch runs to its end without an exception, and its violently unstable orbits' multipliers, computed from the
-condensed collocation blocks, agree with a multiple-shooting referee written here (scipy's DOP853 at rtol 1e-13 on
+condensed collocation blocks, agree with a multiple-shooting referee (scipy's DOP853 at rtol 1e-13 on
 the variational equations over several segments, its own Newton iteration, the product of the segments'
-monodromies and its eigenvalues in 100-digit arithmetic)."""
+monodromies and its eigenvalues in 100-digit arithmetic: tippedisk_analysis.testing)."""
 
-import math
-
-import mpmath
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
 
 from tippedisk_analysis import dynamics as dy
 from tippedisk_analysis.dynamics.continuation import STATUSES
 from tippedisk_analysis.models import held_spin
+from tippedisk_analysis.testing import product_multipliers, shooting_referee
 
 EPS = 0.01
 SAMPLE_SPINS = (28.0, 31.0, 32.5, 34.0, 35.0)
@@ -37,54 +34,6 @@ def accurate_branch():
     """With error_tol = 1e-8, to spin 35."""
     system, eq = inverted_spin()
     return system, dy.orbit_branch(system, eq, "HOPF1", bounds=(20.0, 35.0), error_tol=1e-8)
-
-
-def segment_flow(system, pars, x, duration):
-    """(x(duration), its state Jacobian) by DOP853 at rtol 1e-13 on the variational equations."""
-    n = system.n
-
-    def rhs(_t, z):
-        J = system.jacobian(z[:n], pars)
-        return np.concatenate([system.f(z[:n], pars), (J @ z[n:].reshape(n, n)).ravel()])
-
-    sol = solve_ivp(rhs, (0.0, duration), np.concatenate([x, np.eye(n).ravel()]), method="DOP853", rtol=1e-13,
-                    atol=1e-13)
-    assert sol.success, sol.message
-    return sol.y[:n, -1], sol.y[n:, -1].reshape(n, n)
-
-
-def referee(system, pars, starts, period, iterations=6):
-    """Multiple shooting on len(starts) segments of equal length: (period, segment Jacobians) after Newton's
-    iteration on x_k+1 = phi(x_k, T / K) (x_K = x_0) with the phase (x_0 - x_0^start) . f(x_0^start) = 0."""
-    K, n = starts.shape
-    x, T = starts.copy(), float(period)
-    anchor, f_anchor = starts[0].copy(), system.f(starts[0], pars)
-    for _ in range(iterations):
-        ends, jacobians = zip(*(segment_flow(system, pars, x[k], T / K) for k in range(K)))
-        F = np.concatenate([np.concatenate([ends[k] - x[(k + 1) % K] for k in range(K)]),
-                            [(x[0] - anchor) @ f_anchor]])
-        J = np.zeros((K * n + 1, K * n + 1))
-        for k in range(K):
-            J[k * n:(k + 1) * n, k * n:(k + 1) * n] = jacobians[k]
-            J[k * n:(k + 1) * n, ((k + 1) % K) * n:((k + 1) % K + 1) * n] -= np.eye(n)
-            J[k * n:(k + 1) * n, -1] = system.f(ends[k], pars) / K
-        J[-1, :n] = f_anchor
-        step = np.linalg.lstsq(J, -F, rcond=None)[0]
-        x += step[:-1].reshape(K, n)
-        T += step[-1]
-        if np.max(np.abs(step)) < 1e-12 * (1 + T):
-            break
-    ends, jacobians = zip(*(segment_flow(system, pars, x[k], T / K) for k in range(K)))
-    return T, jacobians
-
-
-def product_multipliers(jacobians) -> list:
-    """The eigenvalues of the product of the segments' Jacobians in 100-digit arithmetic, by modulus descending."""
-    mpmath.mp.dps = 100
-    M = mpmath.eye(len(jacobians[0]))
-    for J in jacobians:
-        M = mpmath.matrix(J.tolist()) * M
-    return sorted(mpmath.eig(M)[0], key=lambda z: -abs(z))
 
 
 @pytest.mark.slow
@@ -121,8 +70,8 @@ def test_period_and_largest_multiplier_agree_with_a_multiple_shooting_referee(ac
     k = int(np.argmin(np.abs(po.spin.values[:first_turn] - spin)))
     samples = po.orbit[k].values
     segments = 32
-    period, jacobians = referee(system, po.runtime_parameters[k].values, samples[:: len(samples) // segments][:segments],
-                                float(po.period[k]))
+    period, jacobians = shooting_referee(system, po.runtime_parameters[k].values,
+                                         samples[:: len(samples) // segments][:segments], float(po.period[k]))
     exact = product_multipliers(jacobians)
     largest = float(abs(exact[0]))
     mine = float(np.max(np.hypot(po.multiplier_real[k].values, po.multiplier_imag[k].values)))

@@ -83,3 +83,57 @@ def outcome_chunk_scalar(config: outcome_config.MapConfig | dict, start: int, st
         raw["inversion_time"][i] = inversion.first
         raw["lift_off_time"][i] = lift_off.first
     return rules._finish(config, rules.kernel(float(config.tol), int(config.batch_size)), raw, pars)
+
+
+def segment_flow(system, pars, x, duration: float) -> tuple[np.ndarray, np.ndarray]:
+    """(x(duration), its state Jacobian) of a :class:`~tippedisk_analysis.dynamics.System` by scipy's DOP853 at
+    rtol = atol = 1e-13 on the variational equations (independent of heyoka)."""
+    from scipy.integrate import solve_ivp
+
+    n = system.n
+
+    def rhs(_t, z):
+        return np.concatenate([system.f(z[:n], pars), (system.jacobian(z[:n], pars) @ z[n:].reshape(n, n)).ravel()])
+
+    sol = solve_ivp(rhs, (0.0, duration), np.concatenate([x, np.eye(n).ravel()]), method="DOP853", rtol=1e-13,
+                    atol=1e-13)
+    if not sol.success:
+        raise RuntimeError(sol.message)
+    return sol.y[:n, -1], sol.y[n:, -1].reshape(n, n)
+
+
+def shooting_referee(system, pars, starts, period: float, iterations: int = 8) -> tuple[float, list]:
+    """A periodic orbit by multiple shooting on len(starts) segments of equal length: (period, the segments'
+    Jacobians) after Newton's iteration on x_k+1 = phi(x_k, T / K) (x_K = x_0) with the phase
+    (x_0 - x_0^start) . f(x_0^start) = 0, every flow by :func:`segment_flow`."""
+    K, n = starts.shape
+    x, T = np.array(starts, dtype=float), float(period)
+    anchor, f_anchor = x[0].copy(), system.f(x[0], pars)
+    for _ in range(iterations):
+        ends, jacobians = zip(*(segment_flow(system, pars, x[k], T / K) for k in range(K)))
+        F = np.concatenate([np.concatenate([ends[k] - x[(k + 1) % K] for k in range(K)]),
+                            [(x[0] - anchor) @ f_anchor]])
+        J = np.zeros((K * n + 1, K * n + 1))
+        for k in range(K):
+            J[k * n:(k + 1) * n, k * n:(k + 1) * n] = jacobians[k]
+            J[k * n:(k + 1) * n, ((k + 1) % K) * n:((k + 1) % K + 1) * n] -= np.eye(n)
+            J[k * n:(k + 1) * n, -1] = system.f(ends[k], pars) / K
+        J[-1, :n] = f_anchor
+        step = np.linalg.lstsq(J, -F, rcond=None)[0]
+        x += step[:-1].reshape(K, n)
+        T += step[-1]
+        if np.max(np.abs(step)) < 1e-12 * (1 + T):
+            break
+    return T, [segment_flow(system, pars, x[k], T / K)[1] for k in range(K)]
+
+
+def product_multipliers(jacobians) -> list:
+    """The eigenvalues of the product of the segments' Jacobians in 100-digit arithmetic (mpmath), by modulus
+    descending."""
+    import mpmath
+
+    mpmath.mp.dps = 100
+    M = mpmath.eye(len(jacobians[0]))
+    for J in jacobians:
+        M = mpmath.matrix(np.asarray(J).tolist()) * M
+    return sorted(mpmath.eig(M)[0], key=lambda z: -abs(z))

@@ -8,9 +8,9 @@ import json
 import sys
 
 from ..files import show
-from .common import add_disk, add_output, disk_from_args, finite_float, output_path, positive_int, tolerance
+from .common import add_output, disk_from_args, finite_float, output_path, positive_int, tolerance
 from .registry import command
-from .simulate import INITIAL
+from .simulate import INITIAL, add_start_and_physics
 
 
 def _arguments(p) -> None:
@@ -28,14 +28,8 @@ def _arguments(p) -> None:
                    help="noise of every sample in its column's units (default: estimated from the residuals)")
     p.add_argument("--tol", type=tolerance, help="heyoka tolerance of the runs (default 1e-12)")
     p.add_argument("--max-nfev", type=positive_int, help="model runs per horizon (default 200)")
-    init = p.add_argument_group("initial state at the first sample (Table 3 defaults; values not freed are kept)")
-    for option, _, help_text in INITIAL:
-        init.add_argument(f"--{option}", type=finite_float, help=help_text)
-    phys = p.add_argument_group("friction and gravity (Sect. 6 defaults; the start of freed values)")
-    phys.add_argument("--mu", type=finite_float, help="friction coefficient [-] (0.3)")
-    phys.add_argument("--eps", type=finite_float, help="smoothing of (2.29) [m/s] (0.1)")
-    phys.add_argument("--gravity", type=finite_float, help="gravitational acceleration [m/s^2] (9.81)")
-    add_disk(p)
+    add_start_and_physics(p, "initial state at the first sample (Table 3 defaults; values not freed are kept)",
+                          "friction and gravity (Sect. 6 defaults; the start of freed values)")
 
 
 @command("fit", "fit an ODE model's parameters and initial states to a recorded motion", _arguments)

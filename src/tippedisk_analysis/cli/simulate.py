@@ -45,11 +45,16 @@ def _arguments(p) -> None:
                      help="normalise p after each step (quaternion models m2, m4, ..., m10; default on, as Sect. 3.2 "
                           "prescribes; --no-normalize-quaternion for the drift study)")
     mor.add_argument("--progress", action="store_true", default=None, help="always show a progress bar")
-    init = p.add_argument_group("initial state (Table 3 defaults; z and the velocity of G close the contact at C1 "
-                                "without slip)")
+    add_start_and_physics(p, "initial state (Table 3 defaults; z and the velocity of G close the contact at C1 "
+                             "without slip)", "friction and gravity (Sect. 6 defaults)")
+
+
+def add_start_and_physics(p, initial_title: str, physics_title: str) -> None:
+    """The initial-state options (INITIAL), friction and gravity, and the disk's options, in groups of these titles."""
+    init = p.add_argument_group(initial_title)
     for option, _, help_text in INITIAL:
         init.add_argument(f"--{option}", type=finite_float, help=help_text)
-    phys = p.add_argument_group("friction and gravity (Sect. 6 defaults)")
+    phys = p.add_argument_group(physics_title)
     phys.add_argument("--mu", type=finite_float, help="friction coefficient [-] (0.3)")
     phys.add_argument("--eps", type=finite_float, help="smoothing of (2.29) [m/s] (0.1)")
     phys.add_argument("--gravity", type=finite_float, help="gravitational acceleration [m/s^2] (9.81)")
