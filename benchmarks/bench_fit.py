@@ -17,7 +17,6 @@
 from __future__ import annotations
 
 import argparse
-import time
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -26,6 +25,8 @@ from scipy.optimize import least_squares
 import tippedisk_analysis as td
 from tippedisk_analysis.models import ode
 from tippedisk_analysis.parameters import Friction, InitialState, Setup
+
+from bench_ode import best_of  # the benchmarks' shared timer (this folder is on sys.path when run as a script)
 
 T_END, DT, NOISE = 3.0, 0.01, 0.01
 START = {"mu": 0.25, "eps": 0.15}
@@ -64,15 +65,6 @@ def finite_differences(t, data, scheme):
     m, p = res.fun.size, 2
     cov = np.linalg.inv(res.jac.T @ res.jac) * (res.fun @ res.fun) / (m - p)
     return res.x, np.sqrt(np.diag(cov)), runs, "completed" if res.status > 0 else "not_converged"
-
-
-def best_of(fn, repeat: int):
-    best, out = np.inf, None
-    for _ in range(repeat):
-        start = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - start)
-    return best, out
 
 
 def main() -> None:
