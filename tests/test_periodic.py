@@ -4,6 +4,7 @@ there is no periodic orbit (docs/periodic_orbits.md)."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -115,6 +116,14 @@ def test_equilibria_are_never_labelled_as_orbits():
     assert tiny.status == "equilibrium" and "not a periodic orbit" in tiny.message
     ds = dy.orbits_dataset([tiny], "no_orbit", tiny.message, {})
     assert int(ds.orbit_status[0]) == dy.STATUS["equilibrium"] and ds.attrs["n_orbits"] == 0
+
+
+def test_a_multiplier_beyond_the_float_range_is_stored_unstable_not_zero():
+    orbit = dy.find_orbit(dy.textbook_system("vanderpol"), [2.0, 0.0], 6.66)
+    overflowed = dataclasses.replace(orbit, multipliers=np.array([complex(math.inf, math.nan), 1.0 + 0j]),
+                                     trivial=np.array([False, True]))
+    ds = dy.orbits_dataset([overflowed], "completed", "", {})
+    assert float(ds.multiplier_real[0, 0]) == math.inf and float(ds.multiplier_imag[0, 0]) == 0.0
 
 
 def test_bad_guesses_are_one_line_errors():

@@ -62,7 +62,8 @@ def orbits_dataset(orbits: list[PeriodicOrbit], status: str, message: str, confi
 
     Dims: point (orbit), floquet (multipliers by modulus), sample (along one period), state,
     observable, runtime_parameter, special_point. Non-finite numbers of failed searches are stored as 0
-    with the point's ``orbit_status`` saying why (never a silent NaN).
+    with the point's ``orbit_status`` saying why (never a silent NaN); a multiplier beyond the float range (above
+    about 1e308) is stored as inf.
     """
     import heyoka as hy
 
@@ -73,6 +74,12 @@ def orbits_dataset(orbits: list[PeriodicOrbit], status: str, message: str, confi
     def clean(a):
         a = np.asarray(a, dtype=float)
         return np.where(np.isfinite(a), a, 0.0)
+
+    def clean_multiplier(a):
+        """A failed search's NaN becomes 0 (its orbit_status says so); a multiplier beyond the float range keeps
+        its infinite part: it is unstable, not 0."""
+        a = np.asarray(a, dtype=float)
+        return np.where(np.isnan(a), 0.0, a)
 
     def resample(o, a):
         a = np.asarray(a, dtype=float)
@@ -106,10 +113,10 @@ def orbits_dataset(orbits: list[PeriodicOrbit], status: str, message: str, confi
                                    "|dx/dtau - T f(x)| at the Gauss points"}),
         "newton_iterations": ("point", np.array([o.iterations for o in orbits], np.int32),
                               {"units": "1", "long_name": "Newton steps"}),
-        "multiplier_real": (("point", "floquet"), clean(mu.real),
+        "multiplier_real": (("point", "floquet"), clean_multiplier(mu.real),
                             {"units": "1", "long_name": "Floquet multipliers (monodromy eigenvalues) by modulus, "
                                                         "real part (of the last iterate unless converged)"}),
-        "multiplier_imag": (("point", "floquet"), clean(mu.imag),
+        "multiplier_imag": (("point", "floquet"), clean_multiplier(mu.imag),
                             {"units": "1", "long_name": "Floquet multipliers, imaginary part"}),
         "multiplier_trivial": (("point", "floquet"), np.array([o.trivial for o in orbits], np.int8),
                                {"long_name": "1: a trivial multiplier (flow direction; families of solutions)",
