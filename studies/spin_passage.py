@@ -7,7 +7,9 @@ Runs ODE Model 1 (symmetry-reduced) from Table 3's start at 36 rad/s on past the
 0.005 m/s (and 40 rad/s at eps 0.01), splits each sample near the inverted spin into its nutation and precession
 (analysis/spin_passage.py) and prints, per run, the slow times eps t of the inversion and of the fall back below G
 and the linear rates against the measured growth. Writes spin_passage.nc (kind spin_passage: the run at eps
-0.01 m/s, 36 rad/s) and spin_passage.png (with the amplitude model (C8) from eps t = 0.35 m after the inversion).
+0.01 m/s, 36 rad/s), spin_passage_runs.nc (kind spin_passage_runs: height and spin of the runs at 36 rad/s) and
+spin_passage.png (with the amplitude model (C8) from eps t = 0.35 m after the inversion); :func:`redraw` draws the
+figure again from the two datasets.
 """
 
 from __future__ import annotations
@@ -15,14 +17,16 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
-from tippedisk_studies._common import finish, prepare
+import xarray as xr
+from tippedisk_studies._common import prepare, save
 
 import tippedisk_analysis as td
 from tippedisk_analysis.analysis import critical_spin as cs
 from tippedisk_analysis.analysis import inversion
 from tippedisk_analysis.analysis import spin_passage as sp
+from tippedisk_analysis.plotting import style
+from tippedisk_analysis.results import make_attrs
 
 SPIN = 36.0  # rad/s: above the threshold 33.69 rad/s (eps 0.1) of the Table 3 start
 EPS = (0.1, 0.05, 0.02, 0.01, 0.005)  # m/s
@@ -73,46 +77,73 @@ def energy_check(ds, setup) -> str:
     return "\n".join(lines)
 
 
-def figure(found: dict, path: Path) -> None:
-    fig, ax = plt.subplots(1, 3, figsize=(15, 4.2))
-    for (spin, eps), ds in found.items():
-        if spin != SPIN:
-            continue
-        slow = eps * ds.time.values
-        ax[0].plot(slow, ds.height.values, lw=0.4, label=rf"$\varepsilon$ = {eps:g} m/s")
-        ax[2].plot(slow, ds.spin.values, lw=0.4, label=rf"$\varepsilon$ = {eps:g} m/s")
-    ax[0].axhline(inversion.INVERSION_HEIGHT, color="grey", ls="--", label="criterion r + 0.8 e")
-    ax[0].set(xlabel=r"slow time $\varepsilon t$ [m]", ylabel="(z_S - r) / e", ylim=(-3, 1.2), xlim=(0, 1.5),
-              title=f"Table 3's start, {SPIN:g} rad/s: S up, then down")
-    ds = found[(SPIN, STORED_EPS)]
+def runs_dataset(found: dict) -> xr.Dataset:
+    """The drawn runs at SPIN, one after another along ``sample``: eps, slow time eps t, height and spin (kind
+    spin_passage_runs)."""
+    drawn = [(eps, ds) for (spin, eps), ds in found.items() if spin == SPIN]
+    column = {"run_eps": [np.full(ds.sizes["time"], eps) for eps, ds in drawn],
+              "slow_time": [eps * ds.time.values for eps, ds in drawn],
+              "height": [ds.height.values for _eps, ds in drawn], "spin": [ds.spin.values for _eps, ds in drawn]}
+    units = {"run_eps": ("m s-1", "regularisation eps of the run"), "slow_time": ("m", "slow time eps t"),
+             "height": ("1", "height of S, (z_S - r) / e"), "spin": ("rad s-1", "spin alpha_dot")}
+    ds = xr.Dataset({name: ("sample", np.concatenate(column[name]).astype("float32"),
+                            {"units": units[name][0], "long_name": units[name][1]}) for name in column})
+    message = "; ".join(f"eps {eps:g} m/s: {run.attrs['message']}" for eps, run in drawn)
+    ds.attrs = make_attrs("spin_passage_runs", {"spin": SPIN, "eps": [eps for eps, _ in drawn]}, "completed",
+                          message, model=drawn[0][1].attrs.get("model"),
+                          title=f"ODE Model 1 from Table 3 at {SPIN:g} rad/s past the inversion, per eps")
+    return ds
+
+
+@style.styled
+def figure(runs: xr.Dataset, ds: xr.Dataset, path: Path) -> None:
+    """Stacked: S's height over the slow time per eps; the two modes of the stored run (``ds``, eps = STORED_EPS)
+    against their linear rates and the amplitude model (C8); the spin drifting down through omega_c."""
+    fig, ax = style.stacked(3, panel_height=4.2)
+    for eps in np.unique(runs.run_eps.values)[::-1]:
+        run = runs.where(runs.run_eps == eps, drop=True)
+        ax[0].plot(run.slow_time, run.height, lw=0.4, label=rf"$\varepsilon$ = {eps:g} m s$^{{-1}}$")
+        ax[2].plot(run.slow_time, run.spin, lw=0.4, label=rf"$\varepsilon$ = {eps:g} m s$^{{-1}}$")
+    ax[0].axhline(inversion.INVERSION_HEIGHT, color="grey", ls="--", label=r"criterion $z_S = r + 0.8e$")
+    ax[0].set(xlabel=r"slow time $\varepsilon t$ [m]", ylabel=r"$(z_S - r)/e$", ylim=(-3, 1.2), xlim=(0, 1.5),
+              title=rf"Table 3's start at {SPIN:g} rad s$^{{-1}}$: S rises, stays, falls")
     near_t = ds.near_time.values
     anchor = np.searchsorted(near_t, ds.attrs["t_inverted"] + 0.1 / STORED_EPS)  # the summary's window starts there
-    for mode, color in zip(sp.MODES, ("C0", "C3")):
-        amplitude, rate = ds[f"{mode}_amplitude"].values, ds[f"{mode}_rate"].values
-        integral = np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(near_t))])
-        linear = amplitude[anchor] * np.exp(integral - integral[anchor])
-        ax[1].semilogy(near_t, amplitude, color=color, lw=0.5, label=f"{mode}, ODE Model 1")
-        ax[1].semilogy(near_t, linear, color=color, ls="--", label=f"{mode}, exp of the integrated Re lambda")
     setup = inversion.with_eps(None, STORED_EPS)
     start = near_t[np.searchsorted(near_t, ds.attrs["t_inverted"] + MODEL_START / STORED_EPS)]
     model_t = near_t[near_t >= start] - start
     system = sp.amplitude_system(setup)
     model, _ending = sp.amplitude_run(sp.amplitude_start(ds, start), model_t, system=system)
     model_t = model_t[: len(model)]
-    vertical = system.observe(model.T, np.array([]))["alpha_dot_mean"]
     for k, (mode, color) in enumerate(zip(sp.MODES, ("C0", "C3"))):
-        ax[1].semilogy(start + model_t, np.sqrt(model[:, k + 1]), color=color, ls=":", lw=1.2,
+        amplitude, rate = ds[f"{mode}_amplitude"].values, ds[f"{mode}_rate"].values
+        integral = np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(near_t))])
+        linear = amplitude[anchor] * np.exp(integral - integral[anchor])
+        ax[1].semilogy(near_t, amplitude, color=color, lw=0.5, label=f"{mode}, ODE Model 1")
+        ax[1].semilogy(near_t, linear, color=color, ls="--", label=rf"{mode}, $\exp\int \mathrm{{Re}}\,\lambda\,dt$")
+        ax[1].semilogy(start + model_t, np.sqrt(model[:, k + 1]), color=color, ls=":", lw=1.5,
                        label=f"{mode}, amplitude model (C8)")
+    ax[1].set(xlabel=r"$t$ [s]", ylabel=r"modal amplitude $|z|$ [1]",
+              title=rf"its nutation and precession, $\varepsilon$ = {STORED_EPS:g} m s$^{{-1}}$")
+    vertical = system.observe(model.T, np.array([]))["alpha_dot_mean"]
     ax[2].plot(STORED_EPS * (start + model_t), vertical, color="k", lw=1.0,
-               label=rf"(C8): mean vertical spin W, $\varepsilon$ = {STORED_EPS:g} m/s")
-    ax[1].set(xlabel="t [s]", ylabel="modal amplitude",
-              title=rf"its two modes, $\varepsilon$ = {STORED_EPS:g} m/s")
+               label=rf"(C8): mean vertical spin $W$, $\varepsilon$ = {STORED_EPS:g} m s$^{{-1}}$")
     critical = cs.omega_critical()
     ax[2].axhline(critical.omega_critical, color="k", ls="--", label=r"$\omega_c$: nutation damped above")
     ax[2].axhline(critical.omega_precession, color="k", ls=":", label="precession growing above")
-    ax[2].set(xlabel=r"slow time $\varepsilon t$ [m]", ylabel=r"$\dot\alpha$ [rad/s]", xlim=(0, 1.5),
-              ylim=(20, 40), title="the spin drifts down through omega_c")
-    finish(fig, ax, path, fontsize=7)
+    ax[2].set(xlabel=r"slow time $\varepsilon t$ [m]", ylabel=r"$\dot\alpha$ [rad s$^{-1}$]", xlim=(0, 1.5),
+              ylim=(20, 40), title=r"the spin drifts down through $\omega_c$")
+    for a in ax:
+        a.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=2)
+        a.grid(alpha=0.3)
+    save(fig, path)
+
+
+def redraw(data_dir: str = "data/inversion", figure_dir: str = "docs/figures") -> Path:
+    """spin_passage.png again from the stored runs in ``data_dir`` (the amplitude model (C8) is rerun: a second)."""
+    data, path = Path(data_dir), Path(figure_dir) / "spin_passage.png"
+    figure(td.load(data / "spin_passage_runs.nc"), td.load(data / "spin_passage.nc"), path)
+    return path
 
 
 def main(output_dir: str = "output", quick: bool = False) -> Path:
@@ -125,7 +156,8 @@ def main(output_dir: str = "output", quick: bool = False) -> Path:
     print("per |z|^2 at 32 rad/s, eps 0.01 m/s:", {k: float(f"{v:.4g}") for k, v in
                                                   sp.mode_energetics(32.0, inversion.with_eps(None, 0.01)).items()})
     path = td.save(found[(SPIN, STORED_EPS)], out / "spin_passage.nc")
-    figure(found, path.with_name("spin_passage.png"))
+    runs_path = td.save(runs_dataset(found), out / "spin_passage_runs.nc")
+    figure(td.load(runs_path), found[(SPIN, STORED_EPS)], path.with_name("spin_passage.png"))
     print(f"{path}: {found[(SPIN, STORED_EPS)].attrs['message']}")
     return path
 

@@ -33,7 +33,6 @@ COLUMN_PX = 590
 MIN_FIGURE_TEXT_PX = 14
 # Figures on analysis pages that are not drawn in the plotting package's style, and why
 FIGURE_TEXT_EXEMPT = {
-    "spin_passage.png": "its study's 110-s runs are not stored (data/inversion/spin_passage.nc holds the summary)",
     "nutation_cycles.png": "its study's runs and families are not stored, only their summary",
     "free_nutation.png": "its study's two ODE Model 1 runs are not stored",
     "continuation_window.png": "its background stability map (241 x 121 points) is computed by the study, not stored",
@@ -255,6 +254,28 @@ def test_figures_record_text_readable_at_the_column_width(tmp_path, data, option
     fonts = [t.get_fontsize() for t in texts if t.get_visible() and t.get_text().strip()]
     plt.close(fig)
     assert min(fonts) >= points and fig.get_figwidth() == width_in  # ticks, labels, titles, legends
+
+
+# Study figures drawn again from data/ by their study's redraw(data_dir, figure_dir) (seconds each)
+REDRAWN = {"spin_passage": ("data/inversion", ["spin_passage.png"])}
+
+
+@pytest.mark.parametrize("study", sorted(REDRAWN))
+def test_study_figures_redraw_from_stored_data_in_the_figure_style(tmp_path, study):
+    """A study figure shown on an analysis page is drawn again from its stored datasets alone, WIDTH wide with
+    no text under FONT_PT (the PNG's Description, read back)."""
+    import importlib
+
+    from PIL import Image
+
+    from tippedisk_analysis.plotting.style import DESCRIPTION, FONT_PT, WIDTH
+
+    data_dir, names = REDRAWN[study]
+    importlib.import_module(f"tippedisk_studies.{study}").redraw(str(DOCS.parent / data_dir), str(tmp_path))
+    for name in names:
+        with Image.open(tmp_path / name) as image:
+            points, width = (float(v) for v in DESCRIPTION.search(image.info["Description"]).groups())
+        assert points >= FONT_PT and width == WIDTH, (name, points, width)
 
 
 def test_the_tutorials_kernels_show_no_compile_notice(tmp_path, monkeypatch):
