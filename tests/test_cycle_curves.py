@@ -1,4 +1,5 @@
-"""Folds of cycles continued in two parameters (dynamics/cycle_curves.py) against closed forms."""
+"""Cycle bifurcations continued in two parameters (dynamics/cycle_curves.py, cycle_bordered.py) against closed forms
+and independent one-parameter branches."""
 
 import math
 
@@ -85,3 +86,69 @@ def test_ab_fold_of_cycles_curve_agrees_with_one_parameter_branches_at_fixed_bet
         [(D, T)] = _one_parameter_folds(system, beta)
         assert curve["D"].values[index] == pytest.approx(D, abs=1e-9)
         assert curve["period"].values[index] == pytest.approx(T, rel=1e-6)
+
+
+def _orbit_dataset(system, state, period, parameter, bounds, pars=None, method="collocation"):
+    """The one-parameter orbit branch through the orbit found from (state, period) at pars."""
+    orbit = dy.find_orbit(system, state, period, pars, method=method)
+    br, prob = dy.continue_orbits(orbit, parameter, bounds={parameter: bounds})
+    return br, prob
+
+
+def test_roessler_period_doubling_curve_agrees_with_one_parameter_shooting_branches():
+    """Roessler (b = 0.2): the first period doubling continued in (a, c) from c = 2.8324 at a = 0.2; at a = 0.17, 0.21
+    and 0.24 (marks) against the period doublings that branches in c at those a locate by multiple shooting (the
+    multipliers of heyoka's variational equations: an independent integrator and test)."""
+    system = dy.textbook_system("roessler")
+    br, prob = _orbit_dataset(system, [4.3, 0.0, 0.03], 6.0, "c", (2.5, 3.2))
+    branch = dy.branch_dataset(prob, br)
+    curve = dy.special_point_curve(system, branch, "PD1", ("a", "c"), bounds={"a": (0.15, 0.25)},
+                                   marks=(0.17, 0.21, 0.24))
+    assert curve.attrs["status"] == "completed" and curve.attrs["critical"] == "period_doubling"
+    assert curve.attrs["labels"] == "UZ1 UZ2 UZ3"  # no codimension-two point in this box
+    mu = curve["multiplier_real"].values + 1j * curve["multiplier_imag"].values
+    assert np.max(np.min(np.abs(mu + 1.0), axis=1)) < 1e-7  # a multiplier -1 all along
+    for index in curve["special_index"].values:
+        a = float(curve["a"].values[index])
+        ref, ref_prob = _orbit_dataset(system, [4.0, 0.0, 0.03], 5.8, "c", (2.3, 3.5), system.with_pars(a=a, c=2.3),
+                                       method="shooting")
+        [pd] = [sp for sp in ref.special_points if sp.kind == "period_doubling"]
+        _X, T, c = ref_prob.split(pd.u)
+        assert curve["c"].values[index] == pytest.approx(c, abs=1e-8)
+        assert curve["period"].values[index] == pytest.approx(T, rel=1e-9)
+
+
+def _skewed_torus():
+    """A cycle of non-uniform speed times a Hopf normal form: on r = 1, theta' = 1 + a cos(theta), so
+    T = 2 pi / s and the mean of x1 is (s - 1) / a, s = sqrt(1 - a^2); z = x3 + i x4 has
+    z' = (beta + x1 + i omega2) z - z |z|^2, whose multipliers at z = 0 are exp(T (beta + mean x1) +- i omega2 T):
+    Neimark-Sacker points on beta = (1 - s) / a with theta = omega2 T (mod 2 pi)."""
+    x1, x2, x3, x4 = hy.make_vars("x1", "x2", "x3", "x4")
+    beta, a, omega2 = hy.par[0], hy.par[1], hy.par[2]
+    r2, speed = x1 * x1 + x2 * x2, 1.0 + a * x1
+    g = beta + x1 - (x3 * x3 + x4 * x4)
+    return dy.System("skewed_torus", (x1, x2, x3, x4), (x1 * (1 - r2) - x2 * speed, x2 * (1 - r2) + x1 * speed,
+                                                          g * x3 - omega2 * x4, omega2 * x3 + g * x4),
+                     {"beta": 0.1, "a": 0.5, "omega2": 1.0})
+
+
+def test_neimark_sacker_curve_and_its_strong_resonances_in_closed_form():
+    """The NS curve of the skewed torus in (beta, a) over 0.3 <= a <= 0.7 (omega2 = 1): beta = (1 - s)/a,
+    T = 2 pi / s, theta = T - 2 pi; the 1:4 resonance at theta = pi/2 (s = 4/5, a = 3/5) and the 1:3 at
+    theta = 2 pi/3 (s = 3/4, a = sqrt(7)/4)."""
+    system = _skewed_torus()
+    br, prob = _orbit_dataset(system, [1.0, 0.0, 0.0, 0.0], 2 * math.pi / math.sqrt(0.75), "beta", (0.1, 0.4))
+    branch = dy.branch_dataset(prob, br)
+    assert branch.attrs["labels"] == "NS1"
+    curve = dy.special_point_curve(system, branch, "NS1", ("beta", "a"), bounds={"a": (0.3, 0.7)})
+    assert curve.attrs["status"] == "completed" and curve.attrs["critical"] == "neimark_sacker"
+    a, beta, theta, T = (curve[k].values for k in ("a", "beta", "theta", "period"))
+    assert a.min() == pytest.approx(0.3, abs=1e-12) and a.max() == pytest.approx(0.7, abs=1e-12)
+    s = np.sqrt(1 - a ** 2)
+    assert np.max(np.abs(beta - (1 - s) / a)) < 1e-9
+    assert np.max(np.abs(T - 2 * np.pi / s)) < 1e-8
+    assert np.max(np.abs(theta - (T - 2 * np.pi))) < 1e-8
+    assert curve.attrs["labels"] == "R4_1 R3_1"
+    r4, r3 = curve["special_index"].values
+    assert a[r4] == pytest.approx(0.6, abs=1e-9) and beta[r4] == pytest.approx(1 / 3, abs=1e-9)
+    assert a[r3] == pytest.approx(math.sqrt(7) / 4, abs=1e-9)

@@ -84,11 +84,12 @@ def special_point_curve(system: System, branch: xr.Dataset, label: str, paramete
     ``branch`` (a dataset of :func:`equilibrium_branch` for ``system``) in two ``parameters``, in both
     directions, with its codimension-two points (Bogdanov-Takens, zero-Hopf, double Hopf, Bautin, cusp).
     ``bounds`` {name: (low, high)} boxes the curve; ``scales`` {name: typical size}. Of a ``periodic_orbits``
-    dataset (collocation orbits) the curve through its fold of cycles ``label`` (LP1, ...): a dataset of kind
-    ``cycle_curve`` (:func:`.cycle_curves.cycle_fold_curve`; option keywords as there: ntst, ncol)."""
+    dataset (collocation orbits) the curve through its fold of cycles, period doubling or Neimark-Sacker point
+    ``label`` (LP1, PD1, NS1, ...): a dataset of kind ``cycle_curve`` (:func:`.cycle_curves.cycle_curve`; option
+    keywords as there: ntst, ncol)."""
     if branch.attrs.get("kind") == "periodic_orbits":  # imported here: cycle_curves builds on the orbit modules
-        from .cycle_curves import cycle_fold_curve
-        return cycle_fold_curve(system, branch, label, parameters, bounds=bounds or {}, scales=scales,
+        from .cycle_curves import cycle_curve
+        return cycle_curve(system, branch, label, parameters, bounds=bounds or {}, scales=scales,
                                 options=options, **option_keywords)
     index, kind = special_point(branch, label)
     if kind not in ("hopf", "fold", "branch_point"):
