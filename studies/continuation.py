@@ -2,7 +2,8 @@
 
 At eps = 0.25 m/s the inverted family is continued in Omega; its Hopf point (entry into the window)
 and zero-eigenvalue point (exit) are continued in (Omega, eps) and the Hopf point in (Omega, mu);
-the curves are drawn over the stability map. The normal forms of the special points (bifurcations
+the curves are drawn over the stability map (continuation_window_map.nc; :func:`redraw` draws
+continuation_window.png again from data/continuation). The normal forms of the special points (bifurcations
 from a line of equilibria; docs/continuation.md) are checked against ODE Model 1 simulations.
 
     tippedisk study continuation [--output-dir DIR] [--quick]
@@ -11,15 +12,15 @@ from a line of equilibria; docs/continuation.md) are checked against ODE Model 1
 import sys
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
+from tippedisk_studies._common import save
 
 import tippedisk_analysis as td
 from tippedisk_analysis.analysis import maps, reduced
 from tippedisk_analysis.dynamics import normal_forms
 from tippedisk_analysis.analysis import spin_continuation as sc
 from tippedisk_analysis.models import ode
-from tippedisk_analysis.plotting import plot_dataset
+from tippedisk_analysis.plotting import plot_dataset, style
 from tippedisk_analysis.plotting.continuation import curve_figure
 from tippedisk_analysis.solvers import taylor
 
@@ -46,16 +47,38 @@ def main(output_dir: str = "output", quick: bool = False) -> Path:
     mu_curve = sc.continue_curve(inverted, "HOPF1", ("omega", "mu"), bounds={"mu": (0.1, 0.6), "omega": (0, 100)})
     td.save(mu_curve, out / "continuation_curve_HOPF1_mu.nc")
     print(f"Hopf curve in (Omega, mu) at eps = 0.25: {mu_curve.attrs['message']}")
-    n_om, n_eps = (40, 20) if quick else (241, 121)
-    background = maps.stability_map(np.linspace(20, 50, n_om), np.linspace(0.1, 0.4, n_eps), critical=False)
-    fig, ax = plt.subplots(figsize=(8, 6), constrained_layout=True)
-    curve_figure(curves, background, ax=ax)
-    ax.set(xlim=(24, 48), ylim=(0.1, 0.4))
-    fig.savefig(out / "continuation_window.png", dpi=120)
-    plt.close(fig)
-    print(f"{out / 'continuation_window.png'}: the stable window bounded by the curves")
+    background = window_map(quick)
+    td.save(background, out / "continuation_window_map.nc")
+    window_figure(curves, background, out / "continuation_window.png")
     _simulation_checks(inverted, setup, quick)
     return out / "continuation_inverted.nc"
+
+
+def window_map(quick: bool):
+    """The inverted branch's largest real part of an eigenvalue over (Omega, eps) = [20, 50] rad/s x [0.1, 0.4] m/s
+    (241 x 121 points; 40 x 20 quick), kind stability_map: the background of the window figure."""
+    n_om, n_eps = (40, 20) if quick else (241, 121)
+    ds = maps.stability_map(np.linspace(20, 50, n_om), np.linspace(0.1, 0.4, n_eps), critical=False)
+    kept = ds[["max_real_eig", "stability"]].sel(branch=["inverted"])
+    kept.attrs["message"] = f"{n_om} x {n_eps} points of the inverted branch"
+    return kept.assign(max_real_eig=kept.max_real_eig.astype("float32"))
+
+
+@style.styled
+def window_figure(curves: list, background, path: Path) -> None:
+    """The Hopf and zero-eigenvalue curves over the stable window (shaded) at the page's width."""
+    fig, (ax,) = style.stacked(1, panel_height=5.5)
+    curve_figure(curves, background, ax=ax)
+    ax.set(xlim=(24, 48), ylim=(0.1, 0.4))
+    save(fig, path)
+
+
+def redraw(data_dir: str = "data/continuation", figure_dir: str = "docs/figures") -> Path:
+    """continuation_window.png again from the stored curves and map in ``data_dir``."""
+    data, path = Path(data_dir), Path(figure_dir) / "continuation_window.png"
+    curves = [td.load(data / f"continuation_curve_{label}.nc") for label in ("HOPF1", "BP1", "HOPF2")]
+    window_figure(curves, td.load(data / "continuation_window_map.nc"), path)
+    return path
 
 
 def _simulation_checks(ds, setup, quick: bool) -> None:
