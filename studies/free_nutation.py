@@ -7,7 +7,8 @@ Computes (N1) and sigma (analysis/free_nutation.py) on a grid of the nutation am
 the turning point (Tables 1-2 disk), runs ODE Model 1 from Table 3 at eps = 0.01 m/s with two initial spins (one
 that inverts, one that does not) and reads off each run's a and Omega0 at its turning points and the precession's
 amplitude rho at its top crossings, and integrates (N1) from the inverting run's turning point nearest eps t =
-0.12 m. Writes free_nutation_field.nc (the grid) and free_nutation.png.
+0.12 m. Writes free_nutation_field.nc (the grid), free_nutation_runs.nc (what the figure draws of the runs) and
+free_nutation.png; :func:`redraw` draws the figure again from the two datasets.
 """
 
 from __future__ import annotations
@@ -17,15 +18,16 @@ import math
 import sys
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
-from tippedisk_studies._common import finish, prepare
+from tippedisk_studies._common import prepare, save
 
 import tippedisk_analysis as td
 from tippedisk_analysis.analysis import free_nutation as fn
 from tippedisk_analysis.analysis import inversion
 from tippedisk_analysis.models import reduced
+from tippedisk_analysis.plotting import style
+from tippedisk_analysis.results import make_attrs
 
 AMPLITUDES = np.round(np.arange(0.1, 2.25, 0.1), 2)  # rad
 SPINS = np.round(np.arange(29.6, 33.01, 0.1), 2)  # rad/s
@@ -66,37 +68,82 @@ def rho_from_sigma(rows: np.ndarray, start: float) -> tuple[np.ndarray, np.ndarr
     return rows[:, 0], np.median(rows[:3, 1]) * np.exp(growth)
 
 
-def figure(field: xr.Dataset, runs: list, path_n1: xr.Dataset, start: tuple, predicted: tuple, out: Path) -> None:
-    fig, (ax, bx) = plt.subplots(1, 2, figsize=(13, 5), gridspec_kw={"wspace": 0.25})
+def runs_dataset(runs: list, path_n1: xr.Dataset, start: tuple, predicted: tuple) -> xr.Dataset:
+    """What the figure draws of the two runs (kind free_nutation_runs): each run's turning points (a, Omega0) along
+    ``turn`` and its precession rho along ``top`` (``*_run_spin`` names the run), (N1)'s path from ``start`` and
+    (N2)'s rho along the inverting run's labels."""
+    def along(dim, rows):
+        return {f"{dim}_run_spin": (dim, np.concatenate([np.full(len(r[0]), run["spin"]) for run, r in rows]),
+                                    {"units": "rad s-1", "long_name": "initial spin of the run"})}
+
+    turns = [(run, (run["turns"]["time"], run["turns"]["amplitude"], run["turns"]["spin"])) for run in runs]
+    tops = [(run, (run["rho"][:, 0], run["rho"][:, 1])) for run in runs]
+    data = {**along("turn", turns), **along("top", tops)}
+    for name, k, units, long_name in (("turn_time", 0, "s", "time of the turning point"),
+                                      ("turn_amplitude", 1, "rad", "nutation amplitude a at the turning point"),
+                                      ("turn_spin", 2, "rad s-1", "spin Omega0 at the turning point")):
+        data[name] = ("turn", np.concatenate([r[k] for _run, r in turns]), {"units": units, "long_name": long_name})
+    for name, k, units, long_name in (("top_slow_time", 0, "m", "slow time eps t of the top crossing"),
+                                      ("top_rho", 1, "rad", "precession amplitude rho")):
+        data[name] = ("top", np.concatenate([r[k] for _run, r in tops]), {"units": units, "long_name": long_name})
+    for name, units in (("slow_time", "m"), ("amplitude", "rad"), ("spin", "rad s-1")):
+        data[f"path_{name}"] = ("path", path_n1[name].values, {"units": units, "long_name": f"(N1): {name}"})
+    data["predicted_slow_time"] = ("predicted", predicted[0], {"units": "m", "long_name": "slow time eps t"})
+    data["predicted_rho"] = ("predicted", predicted[1], {"units": "rad", "long_name": "(N2): rho"})
+    config = {"run_eps": RUN_EPS, "run_spins": list(RUN_SPINS), "path_start": PATH_START, "rho_start": RHO_START}
+    ds = xr.Dataset(data)
+    ds.attrs = make_attrs("free_nutation_runs", config, "completed", f"(N1) path: {path_n1.attrs['message']}",
+                          model="ode-euler", title="ODE Model 1 from Table 3 at eps 0.01 m/s in the plane of (N1)",
+                          path_start_amplitude=start[0], path_start_spin=start[1],
+                          run_heights=[run["height"] for run in runs])
+    return ds
+
+
+@style.styled
+def figure(field: xr.Dataset, runs: xr.Dataset, out: Path) -> None:
+    """Stacked: (N1)'s field in (Omega0, a) with the runs' turning points and (N1)'s path; the precession rho of
+    the runs against (N2)."""
+    fig, (ax, bx) = style.stacked(2, panel_height=5.0)
     spins, a = field.spin.values, field.amplitude.values
     checked = field.valid.values.T == 1
     F, G = (np.where(checked, v.values.T, np.nan) for v in (field.amplitude_rate, field.spin_rate))
-    ax.contourf(spins, a, np.sign(F), levels=[-2, 0, 2], colors=["#e8f0ff", "#ffe8e0"])
+    ax.contourf(spins, a, np.sign(F), levels=[-2, 0, 2], colors=["#e8f0ff", "#ffd8c8"])
     ax.contour(spins, a, F, levels=[0.0], colors="C3", linewidths=1.5)
     ax.contour(spins, a, G, levels=[0.0], colors="C0", linewidths=1.0, linestyles="--")
     ax.streamplot(spins, a, np.nan_to_num(G), np.nan_to_num(F), color="0.6", density=0.9, linewidth=0.6,
                   arrowsize=0.7)
-    for run, color in zip(runs, ("C1", "C2")):
-        turns = run["turns"]
-        inside = turns["amplitude"] < 2.2
-        ax.plot(turns["spin"][inside], turns["amplitude"][inside], ".", ms=2.5, color=color,
-                label=f"ODE Model 1, {run['spin']:g} rad/s (highest z_S = r + {run['height']:.3f} e)")
-    ax.plot(path_n1.spin, path_n1.amplitude, "k-", lw=1.5, label="(N1) from the 33.7 rad/s run at eps t = 0.12 m")
-    ax.plot(*start[::-1], "ko", ms=4)
-    ax.axhline(CRITERION_AMPLITUDE, color="0.3", lw=0.6, ls=":")
-    ax.text(spins[-1] - 0.05, CRITERION_AMPLITUDE + 0.02, "the criterion without a precession", ha="right",
-            fontsize=7, color="0.3")
-    ax.set(xlabel="spin at the turning point Omega0 [rad/s]", ylabel="nutation amplitude a [rad]",
-           xlim=(spins[0], spins[-1]), ylim=(0.0, a[-1]),
-           title="(N1): F = 0 (red; nutation grows in the red region), G = 0 (blue, dashed)")
-    ax.legend(fontsize=7, loc="upper left")
-    for run, color in zip(runs, ("C1", "C2")):
-        rows = run["rho"]
-        bx.semilogy(rows[:, 0], rows[:, 1], ".", ms=3, color=color, label=f"rho, ODE Model 1 at {run['spin']:g} rad/s")
-    bx.semilogy(*predicted, "k-", lw=1.2, label="(N2) along the 33.7 rad/s run's labels, from its rho at 0.05 m")
-    bx.set(xlabel="eps t [m]", ylabel="precession amplitude rho [rad]", title="the precession about the family")
-    bx.legend(fontsize=7)
-    finish(fig, (ax, bx), out, fontsize=7)
+    ax.plot([], [], color="C3", lw=1.5, label=r"$F = 0$ (nutation grows in the red region)")
+    ax.plot([], [], color="C0", lw=1.0, ls="--", label=r"$G = 0$")
+    for spin, height, color in zip(RUN_SPINS, runs.attrs["run_heights"], ("C1", "C2")):
+        mine = (runs.turn_run_spin.values == spin) & (runs.turn_amplitude.values < 2.2)
+        ax.plot(runs.turn_spin.values[mine], runs.turn_amplitude.values[mine], ".", ms=3, color=color,
+                label=rf"ODE Model 1, {spin:g} rad s$^{{-1}}$ (highest $z_S = r + {height:.3f}e$)")
+    ax.plot(runs.path_spin, runs.path_amplitude, "k-", lw=1.5,
+            label=rf"(N1) from the {RUN_SPINS[-1]:g} rad s$^{{-1}}$ run at $\varepsilon t$ = {PATH_START:g} m")
+    ax.plot(runs.attrs["path_start_spin"], runs.attrs["path_start_amplitude"], "ko", ms=4)
+    ax.axhline(CRITERION_AMPLITUDE, color="0.3", lw=0.8, ls=":", label="the criterion without a precession")
+    ax.set(xlabel=r"spin at the turning point $\Omega_0$ [rad s$^{-1}$]", ylabel=r"nutation amplitude $a$ [rad]",
+           xlim=(spins[0], spins[-1]), ylim=(0.0, a[-1]), title="(N1): the averaged nutation and spin")
+    for spin, color in zip(RUN_SPINS, ("C1", "C2")):
+        mine = runs.top_run_spin.values == spin
+        bx.semilogy(runs.top_slow_time.values[mine], runs.top_rho.values[mine], ".", ms=3, color=color,
+                    label=rf"$\rho$, ODE Model 1 at {spin:g} rad s$^{{-1}}$")
+    bx.semilogy(runs.predicted_slow_time, runs.predicted_rho, "k-", lw=1.2,
+                label=rf"(N2) along the {RUN_SPINS[-1]:g} rad s$^{{-1}}$ run's labels, from its $\rho$ at "
+                      rf"{RHO_START:g} m")
+    bx.set(xlabel=r"slow time $\varepsilon t$ [m]", ylabel=r"precession amplitude $\rho$ [rad]",
+           title="the precession about the family")
+    for axis in (ax, bx):
+        axis.legend(loc="upper center", bbox_to_anchor=(0.5, -0.17), markerscale=3)
+        axis.grid(alpha=0.3)
+    save(fig, out)
+
+
+def redraw(data_dir: str = "data/inversion", figure_dir: str = "docs/figures") -> Path:
+    """free_nutation.png again from the stored field and runs in ``data_dir``."""
+    data, path = Path(data_dir), Path(figure_dir) / "free_nutation.png"
+    figure(td.load(data / "free_nutation_field.nc"), td.load(data / "free_nutation_runs.nc"), path)
+    return path
 
 
 def main(output_dir: str = "output", quick: bool = False) -> Path:
@@ -133,7 +180,8 @@ def main(output_dir: str = "output", quick: bool = False) -> Path:
     print(f"rho of the {runs[-1]['spin']:g} rad/s run: {predicted[1][0]:.4f} rad at {RHO_START:g} m -> "
           f"{measured[end, 1]:.4f} rad at {measured[end, 0]:.3f} m; (N2) along its labels: {predicted[1][-1]:.4f} rad",
           flush=True)
-    figure(field, runs, path_n1, start, predicted, saved.with_name("free_nutation.png"))
+    stored = td.save(runs_dataset(runs, path_n1, start, predicted), out / "free_nutation_runs.nc")
+    figure(field, td.load(stored), saved.with_name("free_nutation.png"))
     return saved
 
 
