@@ -4,10 +4,11 @@ energy and the spin with the boundary where rolling stops being consistent with 
 
     tippedisk study rolling [--output-dir DIR] [--quick]
 
-Writes rolling_convergence.nc (Moreau Model 1 against the hybrid model for three time steps), rolling_orbit.nc
+Writes rolling_convergence.nc (Moreau Model 1 against the hybrid model for three time steps),
+rolling_inversion_runs.nc (gamma and E_tot of the runs drawn: h1, Moreau Models 1 and 2 at 1e-5 s), rolling_orbit.nc
 (the torus of the Table 3 run: its returns to gamma = pi/2, the central orbit), rolling_family_energy.nc and
 rolling_family_spin.nc (the family with the smallest cone margin per orbit), and the figures
-rolling_inversion.png, rolling_section.png, rolling_family.png.
+rolling_inversion.png, rolling_section.png, rolling_family.png (:func:`redraw` draws them again from data/rolling).
 """
 
 from __future__ import annotations
@@ -52,6 +53,37 @@ def convergence(runs: dict, hybrid: xr.Dataset) -> xr.Dataset:
                          "Moreau Model 1 against the event-driven model (hybrid-euler)"))
 
 
+def inversion_runs(hybrid, m1, m2) -> xr.Dataset:
+    """gamma and E_tot of the three runs drawn in rolling_inversion.png, with h1's switches (kind
+    rolling_inversion_runs): h1 along ``hybrid_time``, Moreau Models 1 and 2 (dt 1e-5 s) along ``time``."""
+    def column(ds, name, dim):
+        units = {"gamma": "rad", "E_tot": "J"}[name]
+        return (dim, ds[name].values.astype("float32"), {"units": units, "long_name": ds[name].attrs.get(
+            "long_name", name)})
+
+    data = {"gamma_h1": column(hybrid, "gamma", "hybrid_time"), "E_tot_h1": column(hybrid, "E_tot", "hybrid_time"),
+            "gamma_m1": column(m1, "gamma", "time"), "E_tot_m1": column(m1, "E_tot", "time"),
+            "gamma_m2": column(m2, "gamma", "time"), "E_tot_m2": column(m2, "E_tot", "time"),
+            "switch_time": ("switch", hybrid.switch_time.values, {"units": "s", "long_name": "time of h1's switch"}),
+            "switch_mode": ("switch", hybrid.switch_mode.values, {"units": "1", "long_name": "h1's mode after it"})}
+    coords = {"hybrid_time": ("hybrid_time", hybrid.time.values, {"units": "s", "long_name": "time of h1"}),
+              "time": ("time", m1.time.values, {"units": "s", "long_name": "time of the Moreau runs"})}
+    message = "; ".join(f"{name}: {ds.attrs['message']}" for name, ds in (("h1", hybrid), ("m1", m1), ("m2", m2)))
+    ds = xr.Dataset(data, coords=coords)
+    ds.attrs = make_attrs("rolling_inversion_runs", {"t_run": float(hybrid.time[-1]), "moreau_dt": 1e-5},
+                          "completed", message, model="h1, m1, m2",
+                          title="Table 3's inversion by the event-driven model and Moreau Models 1 and 2")
+    return ds
+
+
+def runs_of(stored: xr.Dataset) -> tuple:
+    """(h1, Moreau Model 1, Moreau Model 2) as datasets with ``time``, ``gamma``, ``E_tot`` from
+    :func:`inversion_runs`' dataset (h1's with its switches)."""
+    hybrid = xr.Dataset({"gamma": stored.gamma_h1, "E_tot": stored.E_tot_h1, "switch_time": stored.switch_time,
+                         "switch_mode": stored.switch_mode}).rename(hybrid_time="time")
+    return (hybrid, *(xr.Dataset({"gamma": stored[f"gamma_{m}"], "E_tot": stored[f"E_tot_{m}"]}) for m in ("m1", "m2")))
+
+
 @style.styled
 def inversion_figure(hybrid, m1, m2, conv):
     """Stacked: gamma through the inversion, the Moreau error over its time step, the energy."""
@@ -60,14 +92,18 @@ def inversion_figure(hybrid, m1, m2, conv):
                             (m2, r"Moreau Model 2, $\Delta t$ = 1e-5 s", ":")):
         ax[0].plot(ds.time, ds.gamma, line, label=label)
         ax[2].plot(ds.time, ds.E_tot, line, label=label)
-    for a in (ax[0], ax[2]):
-        a.legend()
-        a.set_xlabel(r"$t$ [s]")
     shade_sliding([ax[0], ax[2]], hybrid)
+    for a in (ax[0], ax[2]):
+        a.set_xlabel(r"$t$ [s]")
+    ax[0].legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=2)
+    ax[2].legend(loc="upper right")
     ax[0].set_xlim(0, 2)
     ax[0].set_ylabel(r"$\gamma$ [rad]")
     ax[0].set_title("through the inversion (shaded: h1 slides)")
     draw_convergence(ax[1], conv)
+    ax[1].lines[0].set_label(r"Moreau Model 1 against h1 on [0, 1] s")
+    ax[1].legend()
+    ax[1].set(xlabel=r"Moreau time step $\Delta t$ [s]", ylabel=r"$\max\,|\gamma_{M1} - \gamma_{h1}|$ [rad]")
     ax[2].set_ylabel(r"$E_\mathrm{tot}$ [J]")
     ax[2].set_ylim(float(hybrid.E_tot[-1]) - 0.01, float(hybrid.E_tot[0]) + 0.005)
     return fig
@@ -137,15 +173,18 @@ def family_figure(families):
 
 
 def redraw(data_dir: str = "data/rolling", figure_dir: str = "docs/figures") -> list[Path]:
-    """rolling_section.png and rolling_family.png again from the stored datasets in ``data_dir`` (the central
-    orbit and the three small tori around it are recomputed: seconds)."""
+    """rolling_inversion.png, rolling_section.png and rolling_family.png again from the stored datasets in
+    ``data_dir`` (the central orbit and the three small tori around it are recomputed: seconds)."""
     data, figures = Path(data_dir), Path(figure_dir)
+    inversion = inversion_figure(*runs_of(td.load(data / "rolling_inversion_runs.nc")),
+                                 td.load(data / "rolling_convergence.nc"))
+    save(inversion, figures / "rolling_inversion.png")
     orbit_ds = td.load(data / "rolling_orbit.nc")
     orbit = central_orbit(orbit_ds)
     save(section_figure(orbit_ds, small_tori(orbit, 300.0), orbit), figures / "rolling_section.png")
     families = [td.load(data / f"rolling_family_{name}.nc") for name in ("energy", "spin")]
     save(family_figure(families), figures / "rolling_family.png")
-    return [figures / "rolling_section.png", figures / "rolling_family.png"]
+    return [figures / name for name in ("rolling_inversion.png", "rolling_section.png", "rolling_family.png")]
 
 
 def central_orbit(orbit_ds):
@@ -166,7 +205,8 @@ def main(output_dir: str = "output", quick: bool = False):
     for dt, e in zip(MOREAU_DTS, conv.gamma_error.values):
         print(f"dt = {dt:g} s: max |gamma_M1 - gamma_h1| on [0, 1] s = {e:.4g} rad, E_tot(end) M1 "
               f"{float(runs[dt].E_tot[-1]):.9f} J")
-    save(inversion_figure(hybrid, runs[1e-5], m2, conv), out / "rolling_inversion.png")
+    stored = td.save(inversion_runs(hybrid, runs[1e-5], m2), out / "rolling_inversion_runs.nc")
+    save(inversion_figure(*runs_of(td.load(stored)), conv), out / "rolling_inversion.png")
 
     orbit_ds = ar.orbits_from_run(hybrid, returns_time=200.0 if quick else ar.RETURNS_TIME)
     td.save(orbit_ds, out / "rolling_orbit.nc")
