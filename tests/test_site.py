@@ -31,6 +31,8 @@ ANALYSIS_PAGES = re.compile(r"^(stability|continuation|periodic_orbits|periodic_
 # narrowest desktop layout; 736 px at a 1366-px window, measured in Chromium) renders at least this large
 COLUMN_PX = 590
 MIN_FIGURE_TEXT_PX = 14
+# On a phone (390 px wide, a ~350-px column) a figure keeps a minimum width (site.css) at which its text is this large
+PHONE_TEXT_PX = 12
 # Figures on analysis pages that are not drawn in the plotting package's style, and why
 FIGURE_TEXT_EXEMPT = {
     "nutation_cycles.png": "its study's runs and families are not stored, only their summary",
@@ -217,6 +219,32 @@ def test_figure_text_on_analysis_pages_is_as_large_as_the_body_text(site):
     assert not small, small
     assert len(sizes) >= 8, sizes
     assert not set(FIGURE_TEXT_EXEMPT) - shown, "exempt figures no analysis page shows"
+
+
+def test_figures_keep_a_readable_width_on_a_phone(site):
+    """At 390 px the text column is about 350 px: site.css keeps every PNG of a <figure> at a minimum width (the
+    figure scrolls sideways in its box), at which each analysis figure's smallest text renders >= PHONE_TEXT_PX."""
+    from PIL import Image
+
+    from tippedisk_analysis.plotting.style import rendered_px
+
+    css = (site / "_static" / "site.css").read_text()
+    assert re.search(r"figure > a\.image-reference\s*\{[^}]*overflow-x: auto", css)
+    minimum = float(re.search(r'figure img\[src\$="\.png"\]\s*\{[^}]*min-width: (\d+)px', css).group(1))
+    small, outside = {}, []
+    for name, body in pages(site).items():
+        if not ANALYSIS_PAGES.match(name):
+            continue
+        outside += [f"{name}: {src}" for src in re.findall(r'<img\b[^>]*\bsrc="([^"]+\.png)"', body)
+                    if not re.search(r'<figure\b[^>]*>\s*<a class="[^"]*image-reference[^"]*" href="[^"]+">\s*<img\b[^>]*'
+                                     rf'src="{re.escape(src)}"', body)]
+        for source in re.findall(r'<figure\b[^>]*>\s*<a\b[^>]*>\s*<img\b[^>]*\bsrc="([^"]+\.png)"', body):
+            with Image.open((site / name).parent / source) as image:
+                description = image.info.get("Description", "")
+            if description and rendered_px(description, minimum) < PHONE_TEXT_PX:
+                small[f"{name}: {Path(source).name}"] = rendered_px(description, minimum)
+    assert not outside, outside
+    assert not small, small
 
 
 @pytest.mark.parametrize("data, options", [("stability_map.nc", {}), ("attractors/basins_eps0.25.nc", {}),
