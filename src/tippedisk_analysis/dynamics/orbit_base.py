@@ -10,7 +10,13 @@ period ``T`` and ``half`` = (x(0) - x(T/2)) / scale, or ``error``); the rest is 
   orbit of a family that no first integral labels, e.g. the symmetric orbits of a reversible system);
 * the state Jacobian of the continuation core is the monodromy with the flow direction deflated exactly
   (:func:`.flows.deflate`), so its eigenvalues are the nontrivial multipliers and the special points come from
-  them (:mod:`.orbit_branches`).
+  them (:mod:`.orbit_branches`);
+* a turn of the parameter is a fold of cycles where a nontrivial multiplier is 1 within FOLD_MULTIPLIER_TOL, or
+  where the count of nontrivial multipliers outside the unit circle differs between orbits either side of it
+  (a multiplier crossed +1): on very unstable orbits (multipliers of 1e60 and more) the critical multiplier is
+  resolved only to about 0.1, its count is not;
+* a branch ends (``event``) where an orbit reaches one of the System's terminal events (:class:`.system.Event`,
+  e.g. a model's edge of validity): the signed event functions min_k +-g(x_k) over the orbit's nodes change sign.
 """
 
 from __future__ import annotations
@@ -30,7 +36,9 @@ MAX_NEWTON_STEP = 0.5  # largest Newton step in scaled unknowns (a trust region:
 TRIVIAL_TOL = 1e-3  # |mu - 1| of the flow direction's multiplier up to which the multipliers are trusted ...
 DECIDING_SHARE, DECIDING_CAP = 0.1, 1e-2  # ... or up to this share of the nontrivial ones' distance from the unit
 # circle, and at most DECIDING_CAP
-FOLD_MULTIPLIER_TOL = 1e-3  # a fold of cycles: its nontrivial multiplier nearest 1 is at most this far from 1
+FOLD_MULTIPLIER_TOL = 1e-3  # a fold of cycles: its nontrivial multiplier nearest 1 is at most this far from 1 ...
+FOLD_PROBES = (1e-3, 4e-3, 1.6e-2, 6.4e-2, 0.256)  # ... or the count outside the unit circle differs at orbits this far
+# (scaled arclength) either side of the turn, the nearest at which the multipliers decide on both sides
 HOPF_NEAR = 0.25  # a Hopf end is looked for among orbits below this share of the largest orbit so far ...
 HOPF_ALIGNED = 0.9  # ... or whose x_0 - x(T/2) lies within arccos(0.9) of the reference's
 
@@ -70,7 +78,10 @@ class OrbitProblem(continuation.Problem):
             self.bounds[index] = (float(low), float(high))
         self._half_ref = np.zeros(self.n)
         self._half_ref_norm = self._largest = 0.0
-        self.terminal = frozenset({"hopf"})
+        self.terminal = frozenset({"hopf", "event"})
+        self._events = [e for e in system.events if e.direction in ("negative", "positive")]
+        self._event_function = (system.function("terminal events", [e.expression for e in self._events])
+                                if self._events else None)
 
     # -- unknowns
     def split(self, u):
@@ -174,12 +185,26 @@ class OrbitProblem(continuation.Problem):
         tests = {"fold": float(point.tangent[self.parameters[0]]), "branch_point": _signed_product(mu - 1.0),
                  "period_doubling": _signed_product(mu + 1.0), "neimark_sacker": _signed_product(mu[i] * mu[j] - 1.0),
                  "hopf": self._hopf_test(point.u)}
+        if self._events:
+            tests["event"] = self.event_margin(point.u)[0]
         if not multipliers_decide(self._nontrivial(point.eigenvalues), self.flow_multiplier_error(point.u)):
             for kind in ("branch_point", "period_doubling", "neimark_sacker"):
                 tests[kind] = math.nan
         if self.integral_names:  # conservative: pairs on the unit circle are generic (elliptic), not a bifurcation
             del tests["neimark_sacker"]
         return tests
+
+    def event_margin(self, u) -> tuple[float, str]:
+        """(min over the System's terminal events and the orbit's nodes of g(x_k) / max_k |g(x_k)|, the name of
+        the event that attains it): positive while the orbit stays where no event ends a run (g > 0 for an event
+        of direction negative, g < 0 for positive), zero where it reaches one. Collocation's nodes cover the orbit;
+        shooting's are the segment starts."""
+        X = self.split(u)[0]
+        g = self.system.evaluate(self._event_function, np.ascontiguousarray(X.T), self.runtime(u))
+        g = g * np.array([1.0 if e.direction == "negative" else -1.0 for e in self._events])[:, None]
+        scaled = g.min(axis=1) / np.maximum(np.abs(g).max(axis=1), 1e-300)
+        k = int(np.argmin(scaled))
+        return float(scaled[k]), self._events[k].name
 
     def _hopf_test(self, u) -> float:
         """The signed amplitude where the orbit is below HOPF_NEAR times the largest of the branch so far (its
@@ -206,6 +231,8 @@ class OrbitProblem(continuation.Problem):
             return float(point.tangent[self.parameters[0]])
         if kind == "hopf":
             return self._signed_amplitude(point.u)
+        if kind == "event":
+            return self.event_margin(point.u)[0]
         real = mu[np.abs(mu.imag) <= 1e-9 * max(1.0, np.abs(mu).max(initial=1.0))].real
         if kind == "branch_point":
             return float(real[np.argmin(np.abs(real - 1.0))] - 1.0) if real.size else math.nan
@@ -231,14 +258,38 @@ class OrbitProblem(continuation.Problem):
                 mu = self._nontrivial(point.eigenvalues)
                 gap = float(np.min(np.abs(mu - 1.0))) if mu.size else math.inf
                 if gap > FOLD_MULTIPLIER_TOL:
-                    return (f"the parameter turns but no nontrivial multiplier is 1 (nearest off by {gap:.2g}): a "
-                            "numerical turn (raise the resolution), not a fold of cycles")
+                    counts = self._counts_across(point, options)
+                    if counts is None or counts[0] == counts[1]:
+                        seen = ("the multipliers either side decide nothing" if counts is None else
+                                f"{counts[0]} outside the unit circle on both sides")
+                        return (f"the parameter turns but no nontrivial multiplier is 1 (nearest off by {gap:.2g}; "
+                                f"{seen}): a numerical turn (raise the resolution), not a fold of cycles")
         return True
+
+    def _counts_across(self, point, options) -> tuple[int, int] | None:
+        """The numbers of nontrivial multipliers outside the unit circle at the orbits FOLD_PROBES (scaled
+        arclength) before and after ``point`` along its tangent, at the nearest pair where both decide
+        (:func:`multipliers_decide`); None where no pair does."""
+        for step in FOLD_PROBES:
+            counts = []
+            for sigma in (-step, step):
+                u = continuation._step_to(self, point, sigma, options)
+                if u is None:
+                    break
+                mu = self._nontrivial(self.state_eigenvalues(u))
+                if not np.all(np.isfinite(mu)) or not multipliers_decide(mu, self.flow_multiplier_error(u)):
+                    break
+                counts.append(int(np.sum(np.abs(mu) > 1.0)))
+            if len(counts) == 2:
+                return counts[0], counts[1]
+        return None
 
     def describe(self, kind: str, u) -> dict:
         ev = self._evaluate(u)
         if "error" in ev:
             return {}
+        if kind == "event":
+            return {"period": ev["T"], "event": self.event_margin(u)[1]}
         mu, trivial = self.floquet(ev)
         rest = mu[~trivial]
         target = {"fold": 1.0, "branch_point": 1.0, "period_doubling": -1.0}.get(kind)

@@ -21,7 +21,7 @@ from .period_limits import KINDS as PERIOD_LIMITS
 from .system import System
 
 SPECIAL_KINDS = {"bound": 0, "fold": 1, "branch_point": 2, "period_doubling": 3, "neimark_sacker": 4,
-                 "homoclinic": 5, "hopf": 6, "user": 7, "heteroclinic": 8, "snic": 9, "period_bound": 10}
+                 "homoclinic": 5, "hopf": 6, "user": 7, "heteroclinic": 8, "snic": 9, "period_bound": 10, "event": 11}
 """int8 codes of ``special_kind`` in periodic-orbit datasets."""
 MULTIPLIER_SOURCES = {"collocation": 0, "shooting": 1, "none": 2}
 """int8 codes of ``multiplier_source`` in collocation datasets (none: not computed, a singular collocation block;
@@ -208,7 +208,8 @@ def _special_table(special: list, system: System, parameter: str | None) -> dict
                           {"long_name": "label: LP fold of cycles, BP branch point, PD period doubling, NS "
                                         "Neimark-Sacker; at the period bound HC approach to a homoclinic orbit, "
                                         "HET to a heteroclinic cycle, SNIC to a saddle-node on the invariant cycle, "
-                                        "PB no limit named"}),
+                                        "PB no limit named; EVENT an orbit reaches a terminal event of the "
+                                        "System (the branch ends there)"}),
         "special_index": ("special_point", np.array([sp.index for sp in special], np.int32),
                           {"units": "1", "long_name": "index along dim point"}),
         "special_value": ("special_point", np.array([sp.value if np.isfinite(sp.value) else 0.0 for sp in special]),
