@@ -34,9 +34,7 @@ MIN_FIGURE_TEXT_PX = 14
 # On a phone (390 px wide, a ~350-px column) a figure keeps a minimum width (site.css) at which its text is this large
 PHONE_TEXT_PX = 12
 # Figures on analysis pages that are not drawn in the plotting package's style, and why
-FIGURE_TEXT_EXEMPT = {
-    "nutation_cycles.png": "its study's runs and families are not stored, only their summary",
-}
+FIGURE_TEXT_EXEMPT: dict[str, str] = {}  # none: every study figure is drawn in the style, from data/ (REDRAWN)
 # Reference generated from the code (docstrings, argparse) and the changelog are not prose pages for the length
 LENGTH_EXEMPT = re.compile(r"^(_generated/|changelog\.html$|genindex\.html$|search\.html$|py-modindex\.html$)")
 
@@ -46,8 +44,9 @@ PROCESS_NOTES = re.compile(
     r"|\bnot done\b|\bshared (?:machine|with)\b|\bother sessions\b|\bone attempt\b|\btried by\b",
     re.I)
 RAW_FORMULA = re.compile(r"sqrt\(|\^\s*[-+(0-9A-Za-z{]")
-# Symbols written as plain text: "r + 0.8 e", z_S, P_N, E_tot, "3 pi / 16"
-PLAIN_NOTATION = re.compile(r"\br [+-] (?:\d*\.?\d+ )?e\b|\b(?:z_S|P_N|E_tot|g_N1|omega_c)\b|\d ?(?:π|pi) ?/ ?\d")
+# Symbols written as plain text: "r + 0.8 e", z_S, P_N, E_tot, "Omega = 40 rad/s", "eps 0.1", "3 pi / 16"
+PLAIN_NOTATION = re.compile(r"\br [+-] (?:\d*\.?\d+ )?e\b|\b(?:z_S|P_N|E_tot|g_N1|omega_c|alpha_dot|Omega|eps|gamma)\b"
+                            r"|\d ?(?:π|pi) ?/ ?\d")
 # Pages whose text comes from files outside docs/ (data/README.md, studies/README.md, the Sect. 6 table a study writes)
 INCLUDED_TEXT = {"paper.html", "data_catalogue.html", "studies_analysis.html", "studies_catalogue.html"}
 
@@ -283,6 +282,7 @@ def test_figures_record_text_readable_at_the_column_width(tmp_path, data, option
 
 # Study figures drawn again from data/ by their study's redraw(data_dir, figure_dir) (seconds each)
 REDRAWN = {"spin_passage": ("data/inversion", ["spin_passage.png"]),
+           "nutation_cycles": ("data/inversion", ["nutation_cycles.png"]),
            "continuation": ("data/continuation", ["continuation_window.png"]),
            "free_nutation": ("data/inversion", ["free_nutation.png"]),
            "rolling": ("data/rolling", ["rolling_inversion.png", "rolling_section.png", "rolling_family.png"])}
