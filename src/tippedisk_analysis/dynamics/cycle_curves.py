@@ -53,6 +53,7 @@ CURVE_KINDS = {kind: code for code, kind in enumerate(CURVE_LABELS)}
 CURVE_OPTIONS = {"ds": 0.02, "ds_max": 0.2, "max_points": 300, "easy_iterations": 5}
 NAMES = {"fold": "folds of cycles", "period_doubling": "period doublings", "neimark_sacker": "Neimark-Sacker points"}
 PAIR_KINDS = ("fold_neimark_sacker", "flip_neimark_sacker", "double_neimark_sacker")  # a complex pair on the circle
+CUSP_SHARE = 1e-3  # a located cusp's tangent in the parameter plane: at most this share of the reference's
 COMPLEX_PAIR = 1e-6  # |Im mu| of a pair of the rest that counts as complex at a located LPNS, PDNS or NSNS
 
 
@@ -81,6 +82,7 @@ class CycleCurveProblem(continuation.Problem):
         self.terminal = frozenset({"resonance_1_1", "resonance_1_2"} if angle else ())
         self.test = BorderedTest(self, critical)
         self._reference = None  # (u of the last reference, its direction in the parameter plane)
+        self._plane_size: dict = {}  # {u of the reference: the size of its tangent's parameter-plane part}
         self._memo: dict = {}
 
     # -- unknowns
@@ -207,15 +209,16 @@ class CycleCurveProblem(continuation.Problem):
         return mu
 
     def _direction(self, point) -> float:
-        """The parameter-plane part of the tangent along the reference's: negative where the curve has reversed
-        in the (p, q) plane (a cusp). The reference is the direction at the last accepted point, taken when the
-        core first tests that point."""
-        t = point.tangent[1:3] * self.scale[1:3]
+        """The parameter-plane part of the tangent (in the parameters over their ``scales``) along the
+        reference's: negative where the curve has reversed in the (p, q) plane (a cusp). The reference is the
+        direction at the last accepted point, taken when the core first tests that point."""
+        t = point.tangent[1:3]
         key, ref = self._reference or (None, None)
         if ref is None:
             ref = t / max(np.linalg.norm(t), 1e-300)
             if point.u.tobytes() == key:
                 self._reference = (key, ref)
+                self._plane_size = {key: float(np.linalg.norm(t))}
         return float(t @ ref)
 
     def tests(self, point) -> dict:
@@ -235,8 +238,14 @@ class CycleCurveProblem(continuation.Problem):
         return self._direction(point) if kind == "cusp" else self.tests(point)[kind]
 
     def accept(self, kind, point, value, options) -> bool:
-        """A located LPNS, PDNS or NSNS needs a complex pair of the rest on the unit circle (a real pair mu, 1/mu
-        is a neutral saddle, no bifurcation)."""
+        """A located cusp needs the tangent's whole parameter-plane part to vanish there (CUSP_SHARE of the
+        reference's; a turn in one parameter alone reverses the direction too where that parameter dominates it).
+        A located LPNS, PDNS or NSNS needs a complex pair of the rest on the unit circle (a real pair mu, 1/mu is
+        a neutral saddle, no bifurcation)."""
+        if kind == "cusp":
+            key = (self._reference or (None,))[0]
+            size = self._plane_size.get(key, math.inf)
+            return bool(np.linalg.norm(point.tangent[1:3]) <= CUSP_SHARE * size)
         if kind in PAIR_KINDS:
             return bool(np.any(np.abs(self.rest(point).imag) > COMPLEX_PAIR))
         return True
@@ -333,6 +342,9 @@ def curve_dataset(prob: CycleCurveProblem, br: continuation.Branch, info: dict) 
         "initial_state": (("point", "state"), u[:, x0:x0 + prob.n], mixed_units("x_0: the orbit's first node")),
         "amplitude": ("point", np.array([orbit_size(prob.split(ui)[0], scale) for ui in u]),
                       {"units": "1", "long_name": "largest distance of the nodes from their mean, in scaled states"}),
+        "discretisation_error": ("point", np.array([prob.mesh.error_estimate(prob.split(ui)[0], scale) for ui in u]),
+                                 {"units": "1", "long_name": "estimated error of x(t) / state_scale on the curve's "
+                                                             "fixed mesh (raise ntst where it grows)"}),
         "multiplier_real": (("point", "floquet"), np.where(ok, mu.real, 0.0),
                             {"units": "1", "long_name": "Floquet multipliers by modulus (the trivial one and the "
                                                         "critical ones on the circle), real part"}),
