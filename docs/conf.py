@@ -221,15 +221,18 @@ def _first_sentence(obj) -> str:
 
 
 def _schema_page() -> str:
-    """Every dataset kind with the variables of one stored example (data/), their dims, units and names."""
+    """Every dataset kind with the variables of its stored example (data/) that has the most, their dims, units
+    and names."""
     from tippedisk_analysis import results
 
     examples: dict[str, tuple[str, object]] = {}
     for path in sorted((HERE.parent / "data").rglob("*.nc")):
         ds = results.load(path)
-        examples.setdefault(ds.attrs["kind"], (str(path.relative_to(HERE.parent)), ds))
+        kind = ds.attrs["kind"]
+        if kind not in examples or len(ds.data_vars) > len(examples[kind][1].data_vars):
+            examples[kind] = (str(path.relative_to(HERE.parent)), ds)
     lines = ["# Dataset kinds and their variables", "",
-             "Generated at build time from one stored example of each kind in `data/` (conventions: "
+             "Generated at build time from the fullest stored example of each kind in `data/` (conventions: "
              "[the dataset schema](../datasets.md)). A run of other settings can add or omit variables "
              "(a model's own outputs, a system's states).", ""]
     for kind, (path, ds) in sorted(examples.items()):
