@@ -222,13 +222,15 @@ def test_figure_text_on_analysis_pages_is_as_large_as_the_body_text(site):
 
 def test_figures_keep_a_readable_width_on_a_phone(site):
     """At 390 px the text column is about 350 px: site.css keeps every PNG of a <figure> at a minimum width (the
-    figure scrolls sideways in its box), at which each analysis figure's smallest text renders >= PHONE_TEXT_PX."""
+    figure scrolls sideways in its box), at which each analysis figure's smallest text renders >= PHONE_TEXT_PX;
+    a table of names and what they do breaks long words to fit the column."""
     from PIL import Image
 
     from tippedisk_analysis.plotting.style import rendered_px
 
     css = (site / "_static" / "site.css").read_text()
     assert re.search(r"figure > a\.image-reference\s*\{[^}]*overflow-x: auto", css)
+    assert re.search(r"@media \(max-width: 34em\)[^@]*table\.docutils[^{]*td\s*\{\s*overflow-wrap: anywhere", css)
     minimum = float(re.search(r'figure img\[src\$="\.png"\]\s*\{[^}]*min-width: (\d+)px', css).group(1))
     small, outside = {}, []
     for name, body in pages(site).items():
