@@ -8,13 +8,16 @@ are MyST notebooks executed during the build (cached in docs/_build/.jupyter_cac
 from __future__ import annotations
 
 import importlib
+import logging
 import os
 import re
 from pathlib import Path
 
 import tippedisk_analysis
+from tippedisk_analysis.plotting.style import STYLE
 
 HERE = Path(__file__).resolve().parent
+logging.getLogger("traitlets").setLevel(logging.WARNING)  # nbclient's "Executing notebook" lines: not the build's news
 GENERATED = HERE / "_generated"
 
 project = "tippedisk_analysis"
@@ -257,14 +260,15 @@ def _generate(_app=None, _config=None) -> None:
 KERNEL_CONFIG = """c.IPKernelApp.log_level = "ERROR"
 c.InteractiveShellApp.exec_lines = [
     "import warnings; warnings.filterwarnings('ignore', message=r'compiling .* \\(first use on this machine')"]
-"""
+c.InlineBackend.rc = """ + repr({**STYLE, "figure.dpi": 100}) + "\n"  # the tutorials' figures in the figure style
 
 
 def _quiet_kernels() -> None:
     """The tutorials' kernels log at ERROR: ipykernel warns at every start that a local TCP kernel is not
     encrypted (the build runs on one machine; nothing leaves it), which buried the build's real messages. They
     ignore the package's CompileNotice (a build on a machine without heyoka's disk cache compiles everything
-    once): a tutorial shows no compile notice, and with it no path of the build machine."""
+    once): a tutorial shows no compile notice, and with it no path of the build machine. Their figures draw in
+    the site's figure style (12-pt text)."""
     profile = GENERATED / "ipython" / "profile_default"
     profile.mkdir(parents=True, exist_ok=True)
     (profile / "ipython_kernel_config.py").write_text(KERNEL_CONFIG)

@@ -231,14 +231,15 @@ def test_figures_keep_a_readable_width_on_a_phone(site):
     css = (site / "_static" / "site.css").read_text()
     assert re.search(r"figure > a\.image-reference\s*\{[^}]*overflow-x: auto", css)
     assert re.search(r"@media \(max-width: 34em\)[^@]*table\.docutils[^{]*td\s*\{\s*overflow-wrap: anywhere", css)
-    minimum = float(re.search(r'figure img\[src\$="\.png"\]\s*\{[^}]*min-width: (\d+)px', css).group(1))
+    assert re.search(r"div\.cell_output img\s*\{[^}]*min-width", css)  # the tutorials' figures
+    minimum = float(re.search(r'figure img\[src\$="\.png"\][^{]*\{[^}]*min-width: (\d+)px', css).group(1))
     small, outside = {}, []
     for name, body in pages(site).items():
         if not ANALYSIS_PAGES.match(name):
             continue
+        linked = r'<figure\b[^>]*>\s*<a class="[^"]*image-reference[^"]*" href="[^"]+">\s*<img\b[^>]*src="'
         outside += [f"{name}: {src}" for src in re.findall(r'<img\b[^>]*\bsrc="([^"]+\.png)"', body)
-                    if not re.search(r'<figure\b[^>]*>\s*<a class="[^"]*image-reference[^"]*" href="[^"]+">\s*<img\b[^>]*'
-                                     rf'src="{re.escape(src)}"', body)]
+                    if not re.search(linked + re.escape(src) + '"', body)]
         for source in re.findall(r'<figure\b[^>]*>\s*<a\b[^>]*>\s*<img\b[^>]*\bsrc="([^"]+\.png)"', body):
             with Image.open((site / name).parent / source) as image:
                 description = image.info.get("Description", "")
@@ -310,7 +311,8 @@ def test_study_figures_redraw_from_stored_data_in_the_figure_style(tmp_path, stu
 
 def test_the_tutorials_kernels_show_no_compile_notice(tmp_path, monkeypatch):
     """A build on a machine without heyoka's disk cache compiles every model once: the tutorials' kernels
-    (docs/conf.py's profile) print no CompileNotice, and with it no path of the build machine."""
+    (docs/conf.py's profile) print no CompileNotice, and with it no path of the build machine; their figures
+    draw in the figure style (12-pt text)."""
     nbformat = pytest.importorskip("nbformat")
     from nbclient import NotebookClient
 
@@ -322,9 +324,12 @@ def test_the_tutorials_kernels_show_no_compile_notice(tmp_path, monkeypatch):
     monkeypatch.setenv("IPYTHONDIR", str(profile.parent))
     cell = ("import time, tippedisk_analysis.compilation as c\nc.NOTICE_AFTER = 0.01\n"
             "with c.compiling('a model'):\n    time.sleep(0.3)\nprint('done')")
-    notebook = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(cell)])
+    style = ("import matplotlib.pyplot as plt\nplt.figure()\n"
+             "print(plt.rcParams['font.size'], plt.rcParams['legend.fontsize'])")
+    notebook = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(cell), nbformat.v4.new_code_cell(style)])
     NotebookClient(notebook, timeout=120, kernel_name="python3").execute()
     assert [(o.get("name"), o.get("text")) for o in notebook.cells[0].outputs] == [("stdout", "done\n")]
+    assert [o.get("text") for o in notebook.cells[1].outputs if o.get("name") == "stdout"] == ["12.0 12.0\n"]
 
 
 def cli_rows(site: Path) -> dict[tuple[str, str], tuple[list[str], str, str]]:
