@@ -152,3 +152,74 @@ def test_neimark_sacker_curve_and_its_strong_resonances_in_closed_form():
     r4, r3 = curve["special_index"].values
     assert a[r4] == pytest.approx(0.6, abs=1e-9) and beta[r4] == pytest.approx(1 / 3, abs=1e-9)
     assert a[r3] == pytest.approx(math.sqrt(7) / 4, abs=1e-9)
+    # on to theta = pi (s = 2/3): the 1:2 resonance, where the curve ends
+    on = dy.special_point_curve(system, branch, "NS1", ("beta", "a"), bounds={"a": (0.5, 0.9)})
+    assert on.attrs["labels"] == "R4_1 R3_1 R2_1" and "ended at a resonance_1_2 point" in on.attrs["message"]
+    assert on["a"].values[-1] == pytest.approx(math.sqrt(5) / 3, abs=1e-9)
+    assert on["theta"].values[-1] == pytest.approx(math.pi, abs=1e-9)
+
+
+def test_fold_neimark_sacker_point_on_a_fold_of_cycles_curve():
+    """The Bautin normal form times a Hopf normal form z' = (gamma + r^2 + i sqrt(2)) z - z |z|^2: on the folds of
+    cycles (beta = -l^2/4, r^2 = l/2) the z multipliers are exp(2 pi (gamma + l/2) +- i 2 sqrt(2) pi); with
+    gamma = -1/2 they cross the unit circle at l = 1, beta = -1/4 (LPNS)."""
+    x, y, u, w = hy.make_vars("x", "y", "u", "w")
+    beta, ell, gamma = hy.par[0], hy.par[1], hy.par[2]
+    r2, omega = x * x + y * y, math.sqrt(2.0)
+    a, g = beta + ell * r2 - r2 * r2, gamma + r2 - (u * u + w * w)
+    pars = {"beta": 0.0, "l": 0.75, "gamma": -0.5}
+    system = dy.System("bautin_hopf", (x, y, u, w), (a * x - y, x + a * y, g * u - omega * w, omega * u + g * w), pars)
+    branch = dy.hopf_branch(system, [0.0] * 4, pars, "beta", bounds=(-1.0, 0.1))
+    curve = dy.special_point_curve(system, branch, "LP1", ("beta", "l"), bounds={"l": (0.5, 2.0)})
+    assert curve.attrs["status"] == "completed" and curve.attrs["labels"] == "LPNS1"
+    [index] = curve["special_index"].values
+    assert curve["l"].values[index] == pytest.approx(1.0, abs=1e-9)
+    assert curve["beta"].values[index] == pytest.approx(-0.25, abs=1e-9)
+    assert np.max(np.abs(curve["beta"].values + curve["l"].values ** 2 / 4)) < 1e-8
+
+
+@pytest.mark.slow
+def test_the_held_disks_fold_of_cycles_in_spin_and_eps_and_in_spin_and_e_against_shooting():
+    """The held-spin model's fold of cycles (Tables 1-2, 30.9533 rad/s at eps = 5 mm/s). Its collocation orbit
+    branch from the shooting orbit at 30.9 rad/s needs a mesh that resolves the fold's double multiplier 1 (a
+    Jordan block: the multipliers near it err by the square root of the discretisation error, so the default mesh
+    rejects the turn as numerical): ntst 160, error_tol 1e-8. Continued in (eps, spin), its points at eps = 2.5 and
+    10 mm/s are the folds nutation_cycles.held_fold_of_cycles finds by shooting; in (e, spin) the fold meets the
+    branch's second fold in a cusp of cycles at e = 2.4308 mm, and at e = 2.45 mm both folds are those of a
+    branch in the spin by shooting."""
+    from tippedisk_analysis.analysis import nutation_cycles as nc
+    from tippedisk_analysis.models import held_spin
+
+    system = held_spin.system()
+    family = nc.drift(30.9, max_amplitude=3.1)
+    k = int(np.argmin(np.abs(nc.amplitude_of(family) - nc.repelling_cycle(family)["amplitude"])))
+    orbit = dy.find_orbit(system, family.start.values[k], float(family.period.values[k]),
+                          system.with_pars(spin=30.9, eps=0.005))
+    br, prob = dy.continue_orbits(orbit, "spin", bounds={"spin": (29.9, 31.9)}, method="collocation", ntst=160,
+                                  error_tol=1e-8, options=dy.Options(ds=0.02, ds_max=0.3, max_points=8))
+    branch = dy.branch_dataset(prob, br)
+    assert branch.attrs["labels"].split()[0] == "LP1"
+    in_eps = dy.special_point_curve(system, branch, "LP1", ("eps", "spin"), bounds={"eps": (0.002, 0.012)},
+                                    marks=(0.0025, 0.01))
+    assert in_eps.attrs["status"] == "completed" and in_eps.attrs["labels"] == "UZ1 UZ2"
+    for index in in_eps["special_index"].values:
+        held = nc.held_fold_of_cycles(30.9, float(in_eps["eps"].values[index]))
+        assert held["status"] == "completed"
+        assert in_eps["spin"].values[index] == pytest.approx(held["spin"], abs=2e-8)
+        assert in_eps["period"].values[index] == pytest.approx(held["period"], rel=1e-8)
+
+    in_e = dy.special_point_curve(system, branch, "LP1", ("e", "spin"), bounds={"e": (0.002, 0.003)},
+                                  scales={"e": 1e-3}, marks=(0.00245,))
+    assert in_e.attrs["status"] == "completed" and in_e.attrs["labels"] == "UZ1 CP1 UZ2"
+    low, cusp, high = in_e["special_index"].values
+    assert in_e["e"].values[cusp] == pytest.approx(0.0024308, abs=1e-7)
+    assert in_e["e"].values.min() == pytest.approx(in_e["e"].values[cusp], abs=1e-12)  # no fold below the cusp
+    start = dict(spin=float(in_e["spin"].values[low]) + 2e-4, eps=0.005, e=0.00245)  # beside the fold
+    beside = dy.find_orbit(system, in_e["initial_state"].values[low], float(in_e["period"].values[low]),
+                           system.with_pars(**start))
+    ref, ref_prob = dy.continue_orbits(beside, "spin", bounds={"spin": (30.84, 30.94)}, method="shooting",
+                                       both_ways=True, options=dy.Options(ds=0.01, ds_max=0.1, max_points=60))
+    folds = sorted(ref_prob.split(sp.u)[2] for sp in ref.special_points if sp.kind == "fold")
+    assert len(folds) == 2
+    assert in_e["spin"].values[low] == pytest.approx(folds[0], abs=2e-8)
+    assert in_e["spin"].values[high] == pytest.approx(folds[1], abs=2e-8)

@@ -78,7 +78,7 @@ class CollocationFloquet:
         for kind, values in (("branch_point", mu - 1.0), ("period_doubling", mu + 1.0),
                              ("neimark_sacker", mu[i] * mu[j] - 1.0)):
             if kind in tests and not math.isnan(tests[kind]):
-                tests[kind] = _signed_distance(values)
+                tests[kind] = signed_distance(values)
         return tests
 
     def accept(self, kind: str, point, value: float, options):
@@ -92,7 +92,7 @@ class CollocationFloquet:
         return super().accept(kind, point, value, options)
 
 
-def _signed_distance(values: np.ndarray) -> float:
+def signed_distance(values: np.ndarray) -> float:
     """The sign of Re prod(values) (complex values come in conjugate pairs) times min |values|: zero where one
     of them is, and bounded whatever their size."""
     values = np.asarray(values, dtype=complex)

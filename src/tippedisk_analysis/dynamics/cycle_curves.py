@@ -36,7 +36,7 @@ from ..errors import DatasetError, ParameterError
 from ..results import config_of, index_coordinate, make_attrs
 from . import continuation
 from .collocation import NCOL, NTST, CollocationProblem
-from .collocation_floquet import _signed_distance
+from .collocation_floquet import signed_distance
 from .collocation_solver import Factorisation, Linearisation, assemble, sparse_jacobian
 from .cycle_bordered import CRITICAL, BorderedTest
 from .datasets import check_system, flag_attrs, mixed_units, state_coordinates, summary, unlocated_attrs
@@ -224,7 +224,7 @@ class CycleCurveProblem(continuation.Problem):
     def tests(self, point) -> dict:
         rest = self.rest(point)
         i, j = np.triu_indices(len(rest), 1)
-        plus, minus, circle = (_signed_distance(values) for values in (rest - 1.0, rest + 1.0, rest[i] * rest[j] - 1.0))
+        plus, minus, circle = (signed_distance(values) for values in (rest - 1.0, rest + 1.0, rest[i] * rest[j] - 1.0))
         if self.critical == "fold":
             return {"cusp": self._direction(point), "fold_flip": minus, "fold_neimark_sacker": circle}
         if self.critical == "period_doubling":
