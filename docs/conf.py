@@ -215,7 +215,7 @@ def _first_sentence(obj) -> str:
 
     text = " ".join((inspect.getdoc(obj) or "").split("\n\n")[0].split())
     text = re.sub(r":(?:class|func|mod|meth|attr|data):`~?\.?([^`]+)`", r"`\1`", text).replace("``", "`")
-    end = re.search(r"(?<!e\.g)(?<!i\.e)\.(\s|$)", text)
+    end = re.search(r"(?<!e\.g)(?<!i\.e)(?<!\bFigs)(?<!\bFig)(?<!\bSect)(?<!\bEq)(?<!\bcf)\.(\s|$)", text)
     text = text[:end.start() + 1] if end else text
     if len(text) <= 160:
         return text

@@ -369,6 +369,18 @@ def test_command_pages_show_the_default_the_help_gives(site):
     assert 'href="../../_static/site.css' in (site / "_generated" / "cli" / "basins.html").read_text()
 
 
+def test_api_descriptions_end_at_a_sentence_not_an_abbreviation(site):
+    """A public name's one-line description is its docstring's first sentence whole: "(the paper's Figs. 13-15)"
+    is not cut after "Figs."."""
+    cut = {}
+    for path in sorted((site / "_generated" / "api").glob("*.html")):
+        for row in re.findall(r"<tr[^>]*>\s*<td>(.*?)</tr>", pages(site)[path.relative_to(site).as_posix()], re.S):
+            text = " ".join(prose(re.split(r"</td>\s*<td>", row)[-1]).split())
+            if re.search(r"\b(?:Figs?|Sect|Eq|cf)\.$", text):
+                cut[f"{path.name}: {text[:40]}"] = text[-30:]
+    assert not cut, cut
+
+
 def test_study_list_prints_each_first_sentence_whole(capsys):
     """`tippedisk study --list`: a study's description is its docstring's first sentence, not cut at the end of
     the docstring's first line."""
