@@ -52,7 +52,8 @@ INCLUDED_TEXT = {"paper.html", "data_catalogue.html", "studies_analysis.html", "
 
 
 def _sources_mtime() -> float:
-    sources = [*DOCS.glob("*.md"), *DOCS.glob("tutorials/*.md"), DOCS / "conf.py", DOCS.parent / "README.md"]
+    sources = [*DOCS.glob("*.md"), *DOCS.glob("tutorials/*.md"), *DOCS.glob("_static/*"), DOCS / "conf.py",
+               DOCS.parent / "README.md"]
     return max(p.stat().st_mtime for p in sources)
 
 
