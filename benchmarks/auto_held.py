@@ -217,8 +217,8 @@ def run(source: str, ndim: int, *, ntst: int, bounds, marks=(), ncol: int = 4, n
         ds_max: float = 0.5) -> tuple:
     """AUTO-07p's periodic-orbit branch (IPS 2, exact Jacobian JAC 1, ``ntst`` x ``ncol``, its default tolerances
     EPSL = EPSU = 1e-7, EPSS = 1e-5) of the equation file ``source`` (:func:`equation_file`) in PAR(1) within
-    ``bounds``, user points at ``marks``, at most ``nmx`` points: (bifpy's result, wall time [s], CPU time [s] of
-    this process and its children (gfortran, AUTO-07p), AUTO-07p's own total time [s] or nan)."""
+    ``bounds`` (RL0, RL1), user points at ``marks``, at most ``nmx`` points: (bifpy's result, wall time [s], CPU time [s] of this process and its children (gfortran, AUTO-07p),
+    AUTO-07p's own total time [s] or nan)."""
     from bifpy import auto
     from bifpy.auto import _transpile
 
@@ -256,13 +256,12 @@ def _cpu_time() -> float:
 def marked_orbits(result, marks, segments: int, tolerance: float = 1e-3) -> dict:
     """{mark: (AUTO-07p's parameter there, its period, its orbit at ``segments`` equal steps of time (segments, n),
     its Floquet multipliers)} at the labeled point nearest to each of ``marks`` (its user point, or the special point
-    it labeled there instead) within ``tolerance`` of it, on the branch's first pass (before the parameter first
-    turns back)."""
+    it labeled there instead) within ``tolerance`` of it, on the branch's first pass (before its first fold LP; the
+    parameter also steps back where AUTO-07p locates a special point, so a step back is no turn)."""
     from scipy.interpolate import CubicSpline
 
     points = result.branches[0].points
-    steps = np.sign(np.diff([float(p.parameters[0]) for p in points]))
-    turn = 1 + int(np.argmax(steps != steps[0])) if np.any(steps != steps[0]) else len(points)
+    turn = next((k for k, p in enumerate(points) if code(p) == "LP"), len(points))
     labeled = [p for p in points[:turn] if p.is_labeled and p.periodic_orbit is not None]
     found = {}
     for mark in marks:

@@ -1,15 +1,18 @@
 """Benchmark: the held-spin model's cycle branch from HOPF1 of the inverted spin (Tables 1-2 disk, eps = 0.01 m/s;
 the equilibrium branch over spin 20-40 as tests/test_held_spin.py builds it) by the package's collocation to spin
-35 rad/s (its defaults, and error_tol = 1e-8) and, when ``bifpy`` is importable, by AUTO-07p to the end of its run
-(ntst 80 and 160, ncol 4, exact Jacobian; :mod:`auto_held` exports the System's equations for it and checks the
-export against the System at random states). Prints the cold run (first call in the process) and the median of
-``--repeat`` warm runs (wall and CPU time, AUTO-07p's including bifpy's gfortran compile of the model), the special
-points, and at the sample spins (user points of every tool) the periods and largest multipliers against a
-multiple-shooting referee started from each tool's own orbit at its own spin (scipy DOP853 at rtol 1e-13 on the
-variational equations over 32 segments, Newton on the segment starts and the period; the segments' product's
-eigenvalues in 100-digit arithmetic), then one table. Not a test.
+35 rad/s (its defaults, and error_tol = 1e-8) and, when ``bifpy`` is importable, by AUTO-07p (ncol 4, exact
+Jacobian) to the end of its run at ntst 80 and 160, and at ntst 160 to spin 35 (RL1) (:mod:`auto_held` exports
+the System's equations for it and checks the export against the System at random states). Prints the cold run
+(first call in the process) and the median of ``--repeat`` warm runs (wall and CPU time; AUTO-07p's include
+bifpy's gfortran compile of the model), the special points, and at the sample spins (every tool's user points)
+the periods and largest multipliers against a multiple-shooting referee started from each tool's own orbit at its
+own spin (scipy DOP853 at rtol 1e-13 on the variational equations over 32 segments, Newton on the segment starts
+and the period; the segments' product's eigenvalues in 100-digit arithmetic); then one table. Not a test.
 
-Measured (2 shared cores, load 2-12; ``--repeat 3``): see docs/benchmarks.md.
+Measured (``--repeat 3``, 2 cores at load 4-6; warm medians, worst period error at spins 28-35): the package 0.41 s
+with its defaults (1.1e-5) and 0.71 s with error_tol 1e-8 (3.7e-8); AUTO-07p 2.70 s at ntst 80 to its end at spin
+35.254 (7.2e-5), 8.59 s at ntst 160 to 35.252 (2.9e-8), 1.96 s at ntst 160 to spin 35 (2.9e-8). docs/benchmarks.md
+has the table.
 
 Run:  .venv/bin/python benchmarks/bench_held_cycles.py [--repeat 3] [--top 35] [--quick]
 AUTO-07p: apt-get install gfortran; .venv/bin/pip install bifpy  (a benchmark extra, never a test dependency)
@@ -31,7 +34,8 @@ import auto_held  # noqa: E402  (this folder's helper, not a package)
 
 SAMPLE_SPINS = (28.0, 31.0, 32.5, 34.0, 35.0)  # rad/s
 RUNS = {"defaults": {}, "error_tol 1e-8": {"error_tol": 1e-8}}
-AUTO_NTST = (80, 160)
+AUTO_RUNS = {"ntst 80": {"ntst": 80}, "ntst 160": {"ntst": 160},
+             "ntst 160 to spin 35": {"ntst": 160, "to_top": True}}  # the last one with RL1 = --top
 SEGMENTS = 32
 
 
@@ -87,7 +91,7 @@ def package_rows(system, eq, args, marks) -> list:
 
 
 def auto_rows(system, eq, args, marks) -> list:
-    """AUTO-07p's runs at AUTO_NTST: prints each one's figures; returns table rows."""
+    """AUTO-07p's AUTO_RUNS: prints each one's figures; returns table rows."""
     from tippedisk_analysis import dynamics as dy
 
     state, pars = dy.point_of(eq, system, dy.special_point(eq, "HOPF1")[0])
@@ -99,10 +103,10 @@ def auto_rows(system, eq, args, marks) -> list:
     errors = auto_held.check_export(system, "spin", source, pars, states, rng.uniform(20, 40, 200))
     print(f"AUTO-07p's equation file: {len(source.splitlines())} lines, written in {export_time:.2f} s; at 200 "
           f"random states against the System: {', '.join(f'{k} {v:.1e}' for k, v in errors.items())} (relative)")
-    bounds = (20.0, args.top if args.quick else 40.0)  # its whole run; the smoke run's to spin 30
     rows = []
-    for ntst in AUTO_NTST[:1] if args.quick else AUTO_NTST:
-        runs = [timed(lambda: auto_held.run(source, system.n, ntst=ntst, bounds=bounds, marks=marks))
+    for name, settings in list(AUTO_RUNS.items())[:1 if args.quick else None]:
+        bounds = (20.0, args.top if args.quick or settings.get("to_top") else 40.0)  # else its whole run
+        runs = [timed(lambda: auto_held.run(source, system.n, ntst=settings["ntst"], bounds=bounds, marks=marks))
                 for _ in range(1 + args.repeat)]
         result = runs[-1][0][0]
         wall, cpu = statistics.median(r[1] for r in runs[1:]), statistics.median(r[2] for r in runs[1:])
@@ -111,12 +115,12 @@ def auto_rows(system, eq, args, marks) -> list:
         end = auto_held.code(points[-1])
         kinds = " ".join(f"{auto_held.code(p)} {float(p.parameters[0]):.4f}" for p in result.branches[0].labeled_points
                          if auto_held.code(p) != "UZ")
-        print(f"AUTO-07p ntst {ntst}: cold {runs[0][1]:.2f} s, warm median {wall:.2f} s (CPU {cpu:.2f} s; its own "
+        print(f"AUTO-07p {name}: cold {runs[0][1]:.2f} s, warm median {wall:.2f} s (CPU {cpu:.2f} s; its own "
               f"clock {own:.2f} s; {args.repeat} runs); {len(points)} points, last spin "
               f"{float(points[-1].parameters[0]):.6f} ({end}); {kinds}")
         period_errors, orbits = [], auto_held.marked_orbits(result, marks, SEGMENTS)
         for at in set(marks) - set(orbits):
-            print(f"  spin {at}: AUTO-07p labeled no orbit within 1e-3 rad/s of it before its first turn")
+            print(f"  spin {at}: AUTO-07p labeled no orbit within 1e-3 rad/s of it before its first fold")
         for spin_at, period_at, starts, multipliers in orbits.values():
             if args.quick and period_errors:
                 continue
@@ -125,7 +129,7 @@ def auto_rows(system, eq, args, marks) -> list:
             line, error = referee_line(system, p, starts, period_at, multipliers)
             period_errors.append(error)
             print(f"  spin {spin_at:.9f}: {line}")
-        rows.append((f"AUTO-07p, ntst {ntst}, ncol 4, exact Jacobian", runs[0][1], wall, cpu, len(points),
+        rows.append((f"AUTO-07p, {name}", runs[0][1], wall, cpu, len(points),
                      float(points[-1].parameters[0]), end, period_errors))
     return rows
 
