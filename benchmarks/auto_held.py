@@ -192,7 +192,8 @@ def check_export(system, parameter: str, source: str, pars, states, values) -> d
                  "Jacobian": (row[n:n + n * n].reshape(n, n, order="F"), system.jacobian(state, p)),
                  "parameter derivative": (row[n + n * n:], exact[n + n * n:])}
         for name, (exported, reference) in pairs.items():
-            errors[name] = max(errors[name], float(np.max(np.abs(exported - reference)) / np.max(np.abs(reference))))
+            scale = max(float(np.max(np.abs(reference))), np.finfo(float).tiny)
+            errors[name] = max(errors[name], float(np.max(np.abs(exported - reference))) / scale)
     return errors
 
 
@@ -217,20 +218,20 @@ def run(source: str, ndim: int, *, ntst: int, bounds, marks=(), ncol: int = 4, n
         ds_max: float = 0.5) -> tuple:
     """AUTO-07p's periodic-orbit branch (IPS 2, exact Jacobian JAC 1, ``ntst`` x ``ncol``, its default tolerances
     EPSL = EPSU = 1e-7, EPSS = 1e-5) of the equation file ``source`` (:func:`equation_file`) in PAR(1) within
-    ``bounds`` (RL0, RL1), user points at ``marks``, at most ``nmx`` points: (bifpy's result, wall time [s], CPU time [s] of this process and its children (gfortran, AUTO-07p),
-    AUTO-07p's own total time [s] or nan)."""
+    ``bounds`` (RL0, RL1), user points at ``marks``, at most ``nmx`` points: (bifpy's result, wall time [s], CPU
+    time [s] of this process and its children (gfortran, AUTO-07p), AUTO-07p's own total time [s] or nan)."""
     from bifpy import auto
     from bifpy.auto import _transpile
 
     settings = dict(ips=auto.IPS_PERIODIC_ORBIT, ndim=ndim, npar=len(PARAMETER_SLOTS), nmx=nmx, ntst=ntst, ncol=ncol,
                     iad=3, ilp=1, isp=2, itmx=9, itnw=5, nwtn=3, jac=1, ds=ds, dsmin=1e-5, dsmax=ds_max,
                     rl0=float(bounds[0]), rl1=float(bounds[1]), a0=-1e300, a1=1e300, epsl=1e-7, epsu=1e-7, epss=1e-5)
-    wall, cpu = time.perf_counter(), _cpu_time()
+    wall, cpu = time.perf_counter(), cpu_time()
     with mock.patch.object(_transpile, "generate_equation_file", lambda *args, **keywords: source):
         result = auto.run(lambda u, p: None, lambda u, p, t: None, settings, icu=[1, auto.PERIOD_INDEX],
                           uzr={1: list(marks)} if marks else None, jac=auto.AUTO_JACOBIAN, transpile=True,
                           keep_output=True)
-    wall, cpu = time.perf_counter() - wall, _cpu_time() - cpu
+    wall, cpu = time.perf_counter() - wall, cpu_time() - cpu
     folder = Path(result.output_directory)
     found = _TOTAL_TIME.search((folder / "stdout.txt").read_text()) if (folder / "stdout.txt").exists() else None
     shutil.rmtree(folder)
@@ -247,7 +248,7 @@ def code(point) -> str:
     return _CODES.get(name, name)
 
 
-def _cpu_time() -> float:
+def cpu_time() -> float:
     """CPU time [s] of this process (all threads) and of its finished children."""
     children = resource.getrusage(resource.RUSAGE_CHILDREN)
     return time.process_time() + children.ru_utime + children.ru_stime
