@@ -301,6 +301,21 @@ def _weighted_fit(columns, P: np.ndarray, reweight: int = 3) -> tuple[np.ndarray
     return coef, cov, float(np.sqrt(np.mean(rel * rel)))
 
 
+def _log_scan(T, P, rates: np.ndarray, reweight: int = 3) -> np.ndarray:
+    """The rms relative residual of :func:`_weighted_fit` for p = p_c + A exp(-lam (T - T_last)) at each of
+    ``rates`` at once (batched QR least squares, the same weights and reweighting)."""
+    X = np.stack(np.broadcast_arrays(1.0, np.exp(-np.outer(rates, T - T[-1]))), axis=-1)  # (rates, orbits, 2)
+    floor = NOISE * max(1.0, float(np.max(np.abs(P))))
+    limit = np.full(len(rates), P[-1])
+    for _ in range(reweight):
+        w = 1.0 / (np.abs(P[None, :] - limit[:, None]) + floor)
+        Q, R = np.linalg.qr(X * w[..., None])
+        coef = np.linalg.solve(R, np.einsum("rni,rn->ri", Q, P * w)[..., None])[..., 0]
+        limit = coef[:, 0]
+    rel = (P - np.einsum("rni,ri->rn", X, coef)) * w
+    return np.sqrt(np.mean(rel * rel, axis=1))
+
+
 def _log_fit(T, P, rate=None) -> tuple[float, float, float, float]:
     """(p_c, its standard error, lam, rms relative residual) of p = p_c + A exp(-lam (T - T_last)); lam by a scan
     and Brent's method on the residual (variable projection) unless given."""
@@ -310,7 +325,7 @@ def _log_fit(T, P, rate=None) -> tuple[float, float, float, float]:
     if rate is None:
         width = T[-1] - T[0]
         grid = np.geomspace(0.3 / width, 100.0 / width, 80)
-        best = grid[int(np.argmin([fit(lam)[2] for lam in grid]))]
+        best = grid[int(np.argmin(_log_scan(T, P, grid)))]
         q = minimize_scalar(lambda q: fit(math.exp(q))[2], bounds=(math.log(best / 1.2), math.log(best * 1.2)),
                             method="bounded").x
         rate = math.exp(q)
