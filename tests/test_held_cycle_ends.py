@@ -52,14 +52,17 @@ def test_a_turn_without_a_crossing_stays_a_numerical_turn(monkeypatch):
 
 def test_a_branch_ends_where_its_orbits_reach_a_terminal_event():
     """r' = r (beta - r^2), theta' = 1 with the event r = R (a model's edge, direction negative): the orbits
-    r = sqrt(beta) reach it at beta = R^2; the branch ends there (EVENT1, status completed), its orbits kept, and
-    its message names the event. Before: it ran on to the bound."""
+    r = sqrt(beta) reach it at beta = R^2, marked EVENT1; with end_at_events the branch ends there (status
+    completed), its orbits kept, and its message names the event. Before: no such point, the branch ran on."""
     x, y = hy.make_vars("x", "y")
     beta, radius = hy.par[0], hy.par[1]
     r2 = x * x + y * y
     system = dy.System("hopf_with_edge", [x, y], [beta * x - y - x * r2, x + beta * y - y * r2],
                        {"beta": 0.0, "R": 0.5}, events=[dy.Event("edge", radius * radius - r2)])
-    po = dy.hopf_branch(system, [0.0, 0.0], {"beta": 0.0, "R": 0.5}, "beta", bounds=(-0.1, 1.0))
+    marked = dy.hopf_branch(system, [0.0, 0.0], {"beta": 0.0, "R": 0.5}, "beta", bounds=(-0.1, 1.0))
+    assert [str(label) for label in marked.special_label.values] == ["EVENT1"]  # by default marked, not an end
+    assert float(marked.beta.max()) == 1.0 and abs(float(marked.beta[int(marked.special_index[0])]) - 0.25) < 1e-8
+    po = dy.hopf_branch(system, [0.0, 0.0], {"beta": 0.0, "R": 0.5}, "beta", bounds=(-0.1, 1.0), end_at_events=True)
     assert po.attrs["status"] == "completed"
     assert [str(label) for label in po.special_label.values] == ["EVENT1"]
     k = int(po.special_index.values[0])
@@ -76,7 +79,7 @@ def hopf1():
     system = held_spin.system()
     eq = dy.equilibrium_branch(system, held_spin.spin_state("inverted"), "spin", bounds=(20.0, 40.0),
                                pars=system.with_pars(spin=20.0, eps=EPS), ds_max=1.0)
-    return system, dy.orbit_branch(system, eq, "HOPF1", bounds=(20.0, 40.0), error_tol=1e-8)
+    return system, dy.orbit_branch(system, eq, "HOPF1", bounds=(20.0, 40.0), error_tol=1e-8, end_at_events=True)
 
 
 def referee_multipliers(system, po, k, segments=64):

@@ -13,10 +13,12 @@ period ``T`` and ``half`` = (x(0) - x(T/2)) / scale, or ``error``); the rest is 
   them (:mod:`.orbit_branches`);
 * a turn of the parameter is a fold of cycles where a nontrivial multiplier is 1 within FOLD_MULTIPLIER_TOL, or
   where the count of nontrivial multipliers outside the unit circle differs between orbits either side of it
-  (a multiplier crossed +1): on very unstable orbits (multipliers of 1e60 and more) the critical multiplier is
-  resolved only to about 0.1, its count is not;
-* a branch ends (``event``) where an orbit reaches one of the System's terminal events (:class:`.system.Event`,
-  e.g. a model's edge of validity): the signed event functions min_k +-g(x_k) over the orbit's nodes change sign.
+  (a multiplier crossed +1): at a fold the critical and the trivial multiplier form a double 1 that a
+  discretisation error delta splits by about sqrt(delta), and on very unstable orbits (multipliers of 1e60 and
+  more) the critical one is resolved only to about 0.1; its count is not;
+* ``event``: an orbit reaches one of the System's terminal events (:class:`.system.Event`, e.g. a model's edge of
+  validity): the signed event functions min_k +-g(x_k) over the orbit's nodes change sign; a special point, and
+  the branch's end where the problem is to stop there (:meth:`OrbitProblem.end_at_events`).
 """
 
 from __future__ import annotations
@@ -37,8 +39,9 @@ TRIVIAL_TOL = 1e-3  # |mu - 1| of the flow direction's multiplier up to which th
 DECIDING_SHARE, DECIDING_CAP = 0.1, 1e-2  # ... or up to this share of the nontrivial ones' distance from the unit
 # circle, and at most DECIDING_CAP
 FOLD_MULTIPLIER_TOL = 1e-3  # a fold of cycles: its nontrivial multiplier nearest 1 is at most this far from 1 ...
-FOLD_PROBES = (1e-3, 4e-3, 1.6e-2, 6.4e-2, 0.256)  # ... or the count outside the unit circle differs at orbits this far
-# (scaled arclength) either side of the turn, the nearest at which the multipliers decide on both sides
+FOLD_PROBES = (1e-3, 4e-3, 1.6e-2, 6.4e-2, 0.256)  # ... or the count outside the unit circle differs between the
+# orbits either side (the bracket the turn was found in, else orbits this far, in scaled arclength, along its tangent)
+COUNTS_KEPT = 64  # the counts of the last orbits whose test functions were evaluated (the bracket among them)
 HOPF_NEAR = 0.25  # a Hopf end is looked for among orbits below this share of the largest orbit so far ...
 HOPF_ALIGNED = 0.9  # ... or whose x_0 - x(T/2) lies within arccos(0.9) of the reference's
 
@@ -78,10 +81,16 @@ class OrbitProblem(continuation.Problem):
             self.bounds[index] = (float(low), float(high))
         self._half_ref = np.zeros(self.n)
         self._half_ref_norm = self._largest = 0.0
-        self.terminal = frozenset({"hopf", "event"})
+        self.terminal = frozenset({"hopf"})
+        self._counts: dict[float, int | None] = {}  # arclength: multipliers outside the unit circle (None: undecided)
         self._events = [e for e in system.events if e.direction in ("negative", "positive")]
         self._event_function = (system.function("terminal events", [e.expression for e in self._events])
                                 if self._events else None)
+
+    def end_at_events(self, end: bool) -> None:
+        """Whether a branch ends at the first orbit that reaches a terminal event of the System (else the point is
+        marked and the branch goes on)."""
+        self.terminal = frozenset({"hopf", "event"} if end else {"hopf"})
 
     # -- unknowns
     def split(self, u):
@@ -187,7 +196,11 @@ class OrbitProblem(continuation.Problem):
                  "hopf": self._hopf_test(point.u)}
         if self._events:
             tests["event"] = self.event_margin(point.u)[0]
-        if not multipliers_decide(self._nontrivial(point.eigenvalues), self.flow_multiplier_error(point.u)):
+        decided = multipliers_decide(mu, self.flow_multiplier_error(point.u))
+        self._counts[float(point.arclength)] = int(np.sum(np.abs(mu) > 1.0)) if decided else None
+        if len(self._counts) > COUNTS_KEPT:
+            del self._counts[next(iter(self._counts))]
+        if not decided:
             for kind in ("branch_point", "period_doubling", "neimark_sacker"):
                 tests[kind] = math.nan
         if self.integral_names:  # conservative: pairs on the unit circle are generic (elliptic), not a bifurcation
@@ -258,7 +271,7 @@ class OrbitProblem(continuation.Problem):
                 mu = self._nontrivial(point.eigenvalues)
                 gap = float(np.min(np.abs(mu - 1.0))) if mu.size else math.inf
                 if gap > FOLD_MULTIPLIER_TOL:
-                    counts = self._counts_across(point, options)
+                    counts = self._counts_beside(point, options)
                     if counts is None or counts[0] == counts[1]:
                         seen = ("the multipliers either side decide nothing" if counts is None else
                                 f"{counts[0]} outside the unit circle on both sides")
@@ -266,22 +279,30 @@ class OrbitProblem(continuation.Problem):
                                 f"{seen}): a numerical turn (raise the resolution), not a fold of cycles")
         return True
 
-    def _counts_across(self, point, options) -> tuple[int, int] | None:
-        """The numbers of nontrivial multipliers outside the unit circle at the orbits FOLD_PROBES (scaled
-        arclength) before and after ``point`` along its tangent, at the nearest pair where both decide
-        (:func:`multipliers_decide`); None where no pair does."""
+    def _counts_beside(self, point, options) -> tuple[int, int] | None:
+        """The numbers of nontrivial multipliers outside the unit circle before and after ``point`` (a turn): on
+        each side at the nearest of the orbits FOLD_PROBES (scaled arclength) along its tangent where they decide,
+        else at the nearest orbit within ds_max whose multipliers decided when its test functions were evaluated
+        (the bracket the turn was found in); None where a side has none."""
+        near = {a - point.arclength: count for a, count in self._counts.items()
+                if count is not None and 0 < abs(a - point.arclength) <= options.ds_max}
+        sides = []
+        for sign in (-1.0, 1.0):
+            seen = [d for d in near if sign * d > 0]
+            count = self._probe(point, sign, options)
+            sides.append(near[min(seen, key=abs)] if count is None and seen else count)
+        return None if None in sides else (sides[0], sides[1])
+
+    def _probe(self, point, sign: float, options) -> int | None:
+        """The count outside the unit circle at the nearest orbit FOLD_PROBES along ``point``'s tangent (sign -1:
+        before it) whose multipliers decide (:func:`multipliers_decide`), else None."""
         for step in FOLD_PROBES:
-            counts = []
-            for sigma in (-step, step):
-                u = continuation._step_to(self, point, sigma, options)
-                if u is None:
-                    break
-                mu = self._nontrivial(self.state_eigenvalues(u))
-                if not np.all(np.isfinite(mu)) or not multipliers_decide(mu, self.flow_multiplier_error(u)):
-                    break
-                counts.append(int(np.sum(np.abs(mu) > 1.0)))
-            if len(counts) == 2:
-                return counts[0], counts[1]
+            u = continuation._step_to(self, point, sign * step, options)
+            if u is None:
+                continue
+            mu = self._nontrivial(self.state_eigenvalues(u))
+            if np.all(np.isfinite(mu)) and multipliers_decide(mu, self.flow_multiplier_error(u)):
+                return int(np.sum(np.abs(mu) > 1.0))
         return None
 
     def describe(self, kind: str, u) -> dict:

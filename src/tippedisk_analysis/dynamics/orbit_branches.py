@@ -22,7 +22,7 @@ method on the arclength, on a smooth function: |mu| - 1 of the critical multipli
   period bound and reports the last periods and the limiting parameter extrapolated from
   p - p_hc ~ exp(-lambda T);
 * ``event`` (EVENT): an orbit reaches one of the System's terminal events (where a run of the model ends, e.g.
-  the edge of its domain); the branch ends there and its message names the event.
+  the edge of its domain); with ``end_at_events`` the branch ends there and its message names the event.
 """
 
 from __future__ import annotations
@@ -86,12 +86,13 @@ def orbit_ncol(orbit: PeriodicOrbit) -> int:
 
 def continue_orbits(orbit: PeriodicOrbit, parameter: str, *, bounds=None, direction: int = 1,
                     both_ways: bool = False, options: continuation.Options | None = None, marks=(),
-                    **problem_options):
+                    end_at_events: bool = False, **problem_options):
     """The branch of periodic orbits through ``orbit`` in ``parameter`` by PALC within ``bounds`` (a (low, high)
     pair for ``parameter``, or {name or "T": (low, high)}), with its special points
     (fold of cycles, branch point, period doubling, Neimark-Sacker, approach to a homoclinic orbit at the
-    period bound ``period_max``; user points at ``marks``); ``problem_options``: those of :func:`orbit_problem`
-    (method, ntst, ncol, segments, ...).
+    period bound ``period_max``; user points at ``marks``; an orbit that reaches a terminal event of the System,
+    where the branch ends if ``end_at_events``); ``problem_options``: those of :func:`orbit_problem` (method,
+    ntst, ncol, segments, ...).
 
     Returns ``(branch, problem)``: ``branch`` is the continuation core's :class:`.continuation.Branch` (its
     ``points`` each hold the unknowns ``u`` of the problem's discretisation, the arclength and the Floquet
@@ -101,6 +102,7 @@ def continue_orbits(orbit: PeriodicOrbit, parameter: str, *, bounds=None, direct
     if bounds is not None and not isinstance(bounds, dict):
         bounds = {parameter: bounds_pair(bounds, parameter)}
     prob, u0 = orbit_problem(orbit, parameter, bounds=bounds, **problem_options)
+    prob.end_at_events(end_at_events)
     options = options or continuation.Options(**CONTINUE_OPTIONS[prob.method])
     if both_ways:
         br = continuation.continue_both_ways(prob, u0, options, marks=marks)
@@ -284,12 +286,14 @@ def _explain_stall(system: System, state, pars, parameter: str, br: continuation
 def orbit_branch(system: System, branch: xr.Dataset, label: str, *, bounds, method: str = DEFAULT_METHOD,
                  period_max: float | None = None, parameter_scale: float = 1.0, marks=(),
                  options: continuation.Options | None = None, n_samples: int = N_SAMPLES,
-                 **keywords) -> xr.Dataset:
+                 end_at_events: bool = False, **keywords) -> xr.Dataset:
     """The branch of periodic orbits born at Hopf point ``label`` of ``branch`` (a dataset of
     :func:`.branches.equilibrium_branch` for ``system``), continued in the branch's parameter within ``bounds``
     = (low, high), with its special points; ``period_max`` stops it at that period (the approach to a
     homoclinic orbit is reported with its extrapolated parameter); ``marks``: parameter values where the orbits
-    are computed exactly (user points UZ1, ...); ``method``: collocation (``ntst``, ``ncol``, ``adapt``,
+    are computed exactly (user points UZ1, ...); ``end_at_events``: the branch ends at the first orbit that reaches
+    a terminal event of the System (e.g. a model's edge; else that orbit is marked EVENT and the branch goes on);
+    ``method``: collocation (``ntst``, ``ncol``, ``adapt``,
     ``error_tol``, ``ntst_max``) or shooting (``segments``, ``phase``); the other ``keywords`` are those of
     :class:`.continuation.Options` (ds, ds_max, max_points, ...). A dataset of kind ``periodic_orbits``."""
     index, kind = special_point(branch, label)
@@ -302,13 +306,13 @@ def orbit_branch(system: System, branch: xr.Dataset, label: str, *, bounds, meth
     state, pars = point_of(branch, system, index)
     return hopf_branch(system, state, pars, parameter, bounds=bounds, method=method, period_max=period_max,
                        parameter_scale=parameter_scale, marks=marks, options=options, n_samples=n_samples,
-                       config={"source_label": label}, **keywords)
+                       config={"source_label": label}, end_at_events=end_at_events, **keywords)
 
 
 def hopf_branch(system: System, state, pars, parameter: str, *, bounds, method: str = DEFAULT_METHOD,
                 period_max: float | None = None, parameter_scale: float = 1.0, marks=(),
                 options: continuation.Options | None = None, n_samples: int = N_SAMPLES, config: dict | None = None,
-                **keywords) -> xr.Dataset:
+                end_at_events: bool = False, **keywords) -> xr.Dataset:
     """The branch of periodic orbits born at the Hopf point (``state``, ``pars``) in ``parameter``, as
     :func:`orbit_branch` (which finds the point on an equilibrium branch); ``config``: more provenance."""
     pars = system.with_pars(pars)
@@ -320,6 +324,7 @@ def hopf_branch(system: System, state, pars, parameter: str, *, bounds, method: 
     prob, u, tangent = hopf_start(system, state, pars, parameter, method=method, bounds={parameter: (low, high)},
                                   period_max=period_max, parameter_scale=parameter_scale, options=options,
                                   **discretisation)
+    prob.end_at_events(end_at_events)
     br = continuation.continue_branch(prob, u, options, tangent=tangent, marks=marks)
     _mark_period_limit(prob, br)
     _name_event_end(prob, br)
