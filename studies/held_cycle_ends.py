@@ -60,7 +60,7 @@ def branch(system, eq, label: str, spins) -> tuple[xr.Dataset, float]:
     """(the orbit branch from ``label``, its wall time [s])."""
     start = time.perf_counter()
     po = dy.orbit_branch(system, eq, label, bounds=spins, error_tol=1e-8, period_max=PERIOD_MAX,
-                         max_points=MAX_POINTS)
+                         max_points=MAX_POINTS, end_at_events=True)
     return po, time.perf_counter() - start
 
 
