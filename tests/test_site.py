@@ -289,6 +289,7 @@ REDRAWN = {"spin_passage": ("data/inversion", ["spin_passage.png"]),
            "nutation_cycles": ("data/inversion", ["nutation_cycles.png"]),
            "continuation": ("data/continuation", ["continuation_window.png"]),
            "free_nutation": ("data/inversion", ["free_nutation.png"]),
+           "held_cycle_ends": ("data/inversion", ["held_cycle_ends.png", "held_cycle_ends_link.png"]),
            "rolling": ("data/rolling", ["rolling_inversion.png", "rolling_section.png", "rolling_family.png"])}
 
 
