@@ -134,15 +134,15 @@ def figure(field: xr.Dataset, runs: xr.Dataset, out: Path) -> None:
     bx.set(xlabel=r"slow time $\varepsilon t$ [m]", ylabel=r"precession amplitude $\rho$ [rad]",
            title="the precession about the family")
     for axis in (ax, bx):
-        axis.legend(loc="upper center", bbox_to_anchor=(0.5, -0.17), markerscale=3)
+        style.legend_below(axis, 0.17, markerscale=3)
         axis.grid(alpha=0.3)
     save(fig, out)
 
 
 def redraw(data_dir: str = "data/inversion", figure_dir: str = "docs/figures") -> Path:
     """free_nutation.png again from the stored field and runs in ``data_dir``."""
-    data, path = Path(data_dir), Path(figure_dir) / "free_nutation.png"
-    figure(td.load(data / "free_nutation_field.nc"), td.load(data / "free_nutation_runs.nc"), path)
+    path = Path(figure_dir) / "free_nutation.png"
+    figure(*(td.load(Path(data_dir) / name) for name in ("free_nutation_field.nc", "free_nutation_runs.nc")), path)
     return path
 
 

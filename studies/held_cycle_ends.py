@@ -171,7 +171,7 @@ def link_figure(ds: xr.Dataset, path: Path) -> None:
                      label=r"lower spin's homoclinic orbit, $\varepsilon$ 0.01" if axis is top else None)
     top.set(xlabel=r"held spin $\Omega$ [rad s$^{-1}$]", ylabel=r"$\frac{1}{2}$ range of $\gamma$ [rad]",
             title="Tables 1-2: the nutation cycles (HOPF2) and the inversion")
-    top.legend(loc="upper center", bbox_to_anchor=(0.5, -0.18), ncol=2)
+    style.legend_below(top, 0.18, ncol=2)
     bottom.set(xlabel=r"held spin $\Omega$ [rad s$^{-1}$]", ylabel="distance from the lower spin",
                yscale="log", title="how close each HOPF2 cycle comes to the lower spin")
     if bottom.get_legend_handles_labels()[0]:

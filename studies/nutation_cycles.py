@@ -187,7 +187,7 @@ def figure(curve: xr.Dataset, drawn: xr.Dataset, family: xr.Dataset, path: Path)
     ax[0].axhline(0.0, color="k", lw=0.6)
     ax[0].set(xlabel=r"nutation amplitude $a$ [rad]", ylabel=r"$\mathrm{d}a/\mathrm{d}(\varepsilon t)$ [rad m$^{-1}$]",
               ylim=(-4, 7), title="Melnikov drift along the family: below 0 the nutation decays")
-    ax[0].legend(title=r"held spin $\Omega$ [rad s$^{-1}$]", loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=4)
+    style.legend_below(ax[0], title=r"held spin $\Omega$ [rad s$^{-1}$]", ncol=4)
     zoom = drawn.zoom_attracting.values == 0
     repelling = sorted([*zip(drawn.zoom_spin.values[zoom], drawn.zoom_amplitude.values[zoom]),
                         *zip(curve.spin.values, curve.repelling_amplitude.values)])
@@ -206,7 +206,7 @@ def figure(curve: xr.Dataset, drawn: xr.Dataset, family: xr.Dataset, path: Path)
                    label=rf"the held model's fold of cycles, $\varepsilon$ = {ORBIT_EPS:g} m s$^{{-1}}$")
     ax[1].set(xlabel=r"held spin $\Omega$ [rad s$^{-1}$]", ylabel=r"$a$ [rad]", ylim=(0, 2.6),
               title="the cycles that bound the damped nutations")
-    ax[1].legend(loc="upper center", bbox_to_anchor=(0.5, -0.2))
+    style.legend_below(ax[1])
     for attracting, line in ((1, "r-"), (0, "r--")):
         mine = drawn.zoom_attracting.values == attracting
         order = np.argsort(drawn.zoom_spin.values[mine])
@@ -217,7 +217,7 @@ def figure(curve: xr.Dataset, drawn: xr.Dataset, family: xr.Dataset, path: Path)
     ax[2].set(xlabel=r"held spin $\Omega$ [rad s$^{-1}$]", ylabel=r"$a$ [rad]",
               title=r"near $\omega_c$: a fold of cycles just below it")
     ax[2].ticklabel_format(axis="x", useOffset=False)
-    ax[2].legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=2)
+    style.legend_below(ax[2], ncol=2)
     members, cycle = portrait_orbits(family)
     for k, member in enumerate(members):
         ax[3].plot(*member.T, color="grey", lw=0.6, label="members of the family" if k == 0 else None)
@@ -229,7 +229,7 @@ def figure(curve: xr.Dataset, drawn: xr.Dataset, family: xr.Dataset, path: Path)
                          rf"{float(drawn.run_start_amplitude[k]):.2f} rad")
     ax[3].set(xlabel=r"$\gamma$ [rad]", ylabel=r"$\dot\gamma$ [rad s$^{-1}$]",
               title=rf"$\Omega$ = {PORTRAIT_SPIN:g} rad s$^{{-1}}$: the family and two runs")
-    for handle in ax[3].legend(loc="upper center", bbox_to_anchor=(0.5, -0.2)).get_lines():
+    for handle in style.legend_below(ax[3]).get_lines():
         handle.set_linewidth(max(handle.get_linewidth(), 1.5))  # the runs' thin lines, visible in the legend
     for a in ax:
         a.grid(alpha=0.3)

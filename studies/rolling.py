@@ -95,7 +95,7 @@ def inversion_figure(hybrid, m1, m2, conv):
     shade_sliding([ax[0], ax[2]], hybrid)
     for a in (ax[0], ax[2]):
         a.set_xlabel(r"$t$ [s]")
-    ax[0].legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=2)
+    style.legend_below(ax[0], ncol=2)
     ax[2].legend(loc="upper right")
     ax[0].set_xlim(0, 2)
     ax[0].set_ylabel(r"$\gamma$ [rad]")
@@ -137,7 +137,7 @@ def section_figure(orbit_ds, tori, orbit):
     ax.set_xlabel(r"$\beta$ [rad]")
     ax.set_ylabel(r"$\omega_y$ [rad s$^{-1}$]")
     ax.set_title(r"returns of the rolling motion to $\gamma = \pi/2$ (upwards)")
-    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.15), markerscale=4)
+    style.legend_below(ax, 0.15, markerscale=4)
     return fig
 
 

@@ -134,7 +134,7 @@ def figure(runs: xr.Dataset, ds: xr.Dataset, path: Path) -> None:
     ax[2].set(xlabel=r"slow time $\varepsilon t$ [m]", ylabel=r"$\dot\alpha$ [rad s$^{-1}$]", xlim=(0, 1.5),
               ylim=(20, 40), title=r"the spin drifts down through $\omega_c$")
     for a in ax:
-        a.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=2)
+        style.legend_below(a, ncol=2)
         a.grid(alpha=0.3)
     save(fig, path)
 

@@ -46,6 +46,12 @@ def stacked(panels: int, panel_height: float = 3.6, extra: float = 0.0, **kwargs
     return fig, list(axes[:, 0])
 
 
+def legend_below(axis, offset: float = 0.2, **kwargs):
+    """The legend of ``axis`` centred below it, ``offset`` axes heights under its bottom edge (clear of the x
+    label), so that a one-column panel keeps its full width for the data."""
+    return axis.legend(loc="upper center", bbox_to_anchor=(0.5, -offset), **kwargs)
+
+
 def smallest_text(fig) -> float:
     """The smallest font size [pt] of the visible, non-empty texts of a drawn ``fig`` (ticks, legends, labels)."""
     fig.canvas.draw()
