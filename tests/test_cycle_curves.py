@@ -181,9 +181,9 @@ def test_fold_neimark_sacker_point_on_a_fold_of_cycles_curve():
 @pytest.mark.slow
 def test_the_held_disks_fold_of_cycles_in_spin_and_eps_and_in_spin_and_e_against_shooting():
     """The held-spin model's fold of cycles (Tables 1-2, 30.9533 rad/s at eps = 5 mm/s). Its collocation orbit
-    branch from the shooting orbit at 30.9 rad/s needs a mesh that resolves the fold's double multiplier 1 (a
-    Jordan block: the multipliers near it err by the square root of the discretisation error, so the default mesh
-    rejects the turn as numerical): ntst 160, error_tol 1e-8. Continued in (eps, spin), its points at eps = 2.5 and
+    branch from the shooting orbit at 30.9 rad/s is computed on a mesh that resolves the fold's double multiplier 1
+    (a Jordan block: the multipliers near it err by the square root of the discretisation error): ntst 160,
+    error_tol 1e-8. Continued in (eps, spin), its points at eps = 2.5 and
     10 mm/s are the folds nutation_cycles.held_fold_of_cycles finds by shooting; in (e, spin) the fold meets the
     branch's second fold in a cusp of cycles (at e = 2.4308 mm), and at e = 2.45 mm both folds are those of a
     branch in the spin by shooting."""
