@@ -227,7 +227,7 @@ def continue_branch(problem: Problem, u0: np.ndarray, options: Options = Options
                 if ends:  # the branch ends at the first terminal special point: drop what lies beyond it
                     del points[ends[0].index + 1:]
                     del special[special.index(ends[0]) + 1:]
-                    message = f"ended at a {ends[0].kind} point at {_where(problem, ends[0].u)}"
+                    message = problem.end_message(ends[0].kind, ends[0].u, _where(problem, ends[0].u))
                     break
             points.append(new)
             carried = problem.remesh(new)

@@ -90,6 +90,11 @@ class Problem:
         """Normal-form coefficients etc. of a located special point (optional)."""
         return {}
 
+    def end_message(self, kind: str, u: np.ndarray, where: str) -> str:
+        """The branch's message where it ends at a terminal special point of ``kind`` at u (``where``: the
+        parameters' values there)."""
+        return f"ended at a {kind} point at {where}"
+
     def project(self, u: np.ndarray) -> np.ndarray:
         """Map an iterate onto a known solution manifold (default: none). A family of equilibria
         known in closed form keeps its states exact this way."""

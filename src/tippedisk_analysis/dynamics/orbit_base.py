@@ -219,6 +219,13 @@ class OrbitProblem(continuation.Problem):
         k = int(np.argmin(scaled))
         return float(scaled[k]), self._events[k].name
 
+    def end_message(self, kind: str, u, where: str) -> str:
+        """At an event end, the event's name and why the branch stops there."""
+        if kind != "event":
+            return super().end_message(kind, u, where)
+        return (f"an orbit reaches the event {self.event_margin(u)[1]} of {self.system.name} at {where} (period "
+                f"{self.split(u)[1]:.6g}): a run of the model ends there, so the branch does")
+
     def _hopf_test(self, u) -> float:
         """The signed amplitude where the orbit is below HOPF_NEAR times the largest of the branch so far (its
         size: the largest scaled distance of its nodes from their mean) or x_0 - x(T/2) lies along the

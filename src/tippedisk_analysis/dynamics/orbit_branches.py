@@ -109,19 +109,7 @@ def continue_orbits(orbit: PeriodicOrbit, parameter: str, *, bounds=None, direct
     else:
         br = continuation.continue_branch(prob, u0, options, direction=direction, marks=marks)
     _mark_period_limit(prob, br)
-    _name_event_end(prob, br)
     return br, prob
-
-
-def _name_event_end(prob: OrbitProblem, br: continuation.Branch) -> None:
-    """Name the terminal event that ended the branch (special point ``event``) in its message."""
-    for sp in br.special_points:
-        if sp.kind == "event" and sp.index == len(br.points) - 1:
-            name = prob.event_margin(sp.u)[1]
-            where = f"{prob.parameter} = {prob.split(sp.u)[2]:.10g}" if prob.parameter else "the last orbit"
-            end = (f"an orbit reaches the event {name} of {prob.system.name} at {where} (period "
-                   f"{prob.split(sp.u)[1]:.6g}): a run of the model ends there, so the branch does")
-            br.message = br.message.replace(f"ended at a event point at {where}", end)
 
 
 def _mark_period_limit(prob: OrbitProblem, br: continuation.Branch) -> None:
@@ -327,7 +315,6 @@ def hopf_branch(system: System, state, pars, parameter: str, *, bounds, method: 
     prob.end_at_events(end_at_events)
     br = continuation.continue_branch(prob, u, options, tangent=tangent, marks=marks)
     _mark_period_limit(prob, br)
-    _name_event_end(prob, br)
     values = np.array([prob.split(p.u)[2] for p in br.points])
     hopf_value = pars[system.parameter_index(parameter)]
     if br.status in ("stalled", "corrector_failed") or np.ptp(values) <= VERTICAL_SPAN * (1 + abs(hopf_value)):
